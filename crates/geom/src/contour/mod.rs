@@ -1,0 +1,1 @@
+//! Streaming, watertight marching cubes with capped domain faces.

@@ -1,0 +1,1 @@
+//! Expressions: parsing, constant folding, compiled evaluation and separable analysis.

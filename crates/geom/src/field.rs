@@ -1,0 +1,143 @@
+//! Scalar fields sampled on regular grids, one z-plane at a time.
+//!
+//! Invariants:
+//! - A [`Grid`] point `(i, j, k)` sits at `origin + (i, j, k) ∘ spacing`; planes are stored x
+//!   fastest, then y (`index = i + nx * j`).
+//! - [`PlaneSampler::sample_plane`] is a pure function of `k`: two calls for the same plane give
+//!   bit-identical values, whichever thread makes them. Contouring relies on this to let two
+//!   chunks evaluate their shared plane independently and still agree on every sign.
+//! - Fields never see model units or solids: [`SolidSampler`] turns a field into the implicit
+//!   function of a solid (negative inside) on the same grid.
+
+/// A regular grid of sample points.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Grid {
+    pub origin: [f64; 3],
+    pub spacing: [f64; 3],
+    pub counts: [usize; 3],
+}
+
+impl Grid {
+    /// The grid with `counts` points per axis spanning `min..=max` exactly.
+    /// Every count must be at least 2.
+    pub fn spanning(min: [f64; 3], max: [f64; 3], counts: [usize; 3]) -> Grid {
+        let spacing = std::array::from_fn(|a| (max[a] - min[a]) / (counts[a] - 1) as f64);
+        Grid { origin: min, spacing, counts }
+    }
+
+    /// Coordinate of sample `i` along axis `axis`.
+    #[inline]
+    pub fn coord(&self, axis: usize, i: usize) -> f64 {
+        self.origin[axis] + i as f64 * self.spacing[axis]
+    }
+
+    /// All sample coordinates along one axis.
+    pub fn axis(&self, axis: usize) -> Vec<f64> {
+        (0..self.counts[axis]).map(|i| self.coord(axis, i)).collect()
+    }
+
+    /// Number of samples in one z-plane.
+    #[inline]
+    pub fn plane_len(&self) -> usize {
+        self.counts[0] * self.counts[1]
+    }
+
+    /// The same index grid with coordinates divided by `cell_size` per axis
+    /// (model units to cell units).
+    pub fn scaled_down(&self, cell_size: [f64; 3]) -> Grid {
+        Grid {
+            origin: std::array::from_fn(|a| self.origin[a] / cell_size[a]),
+            spacing: std::array::from_fn(|a| self.spacing[a] / cell_size[a]),
+            counts: self.counts,
+        }
+    }
+}
+
+/// Samples one field on the z-planes of one grid.
+pub trait PlaneSampler: Sync {
+    /// The grid this sampler was prepared for.
+    fn grid(&self) -> &Grid;
+    /// Writes the field's values on plane `k` into `out` (`out.len() == grid.plane_len()`).
+    fn sample_plane(&self, k: usize, out: &mut [f64]);
+}
+
+/// A scalar field that can be evaluated at arbitrary points and prepared for a grid.
+pub trait ScalarField: Sync + Send {
+    /// Evaluates the field at the points `(xs[n], ys[n], zs[n])` into `out[n]`.
+    fn eval_points(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]);
+
+    /// A sampler for `grid`. The default evaluates point by point in blocks; fields with
+    /// structure (separable trigonometric series) override it with something faster.
+    fn sampler<'a>(&'a self, grid: &Grid) -> Box<dyn PlaneSampler + 'a> {
+        Box::new(PointwiseSampler { field: self, grid: *grid })
+    }
+}
+
+/// Evaluates a field at every grid point, a row of the plane at a time.
+pub struct PointwiseSampler<'a, F: ScalarField + ?Sized> {
+    pub field: &'a F,
+    pub grid: Grid,
+}
+
+impl<F: ScalarField + ?Sized> PlaneSampler for PointwiseSampler<'_, F> {
+    fn grid(&self) -> &Grid {
+        &self.grid
+    }
+
+    fn sample_plane(&self, k: usize, out: &mut [f64]) {
+        let [nx, ny, _] = self.grid.counts;
+        let xs = self.grid.axis(0);
+        let z = vec![self.grid.coord(2, k); nx];
+        let mut y = vec![0.0; nx];
+        for j in 0..ny {
+            y.fill(self.grid.coord(1, j));
+            self.field.eval_points(&xs, &y, &z, &mut out[j * nx..(j + 1) * nx]);
+        }
+    }
+}
+
+/// Which side of a field's level sets is solid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Solid {
+    /// Endoskeleton: `f ≤ offset`.
+    Inside { offset: f64 },
+    /// Exoskeleton: `−f ≤ −offset`, i.e. `f ≥ offset`.
+    Outside { offset: f64 },
+    /// Shell: `|f| ≤ thickness / 2`.
+    Shell { thickness: f64 },
+    /// Eccentric shell: `|f − offset| ≤ thickness / 2`.
+    EccentricShell { offset: f64, thickness: f64 },
+}
+
+impl Solid {
+    /// The implicit function of the solid (negative inside) from the field value.
+    #[inline]
+    pub fn apply(&self, f: f64) -> f64 {
+        match *self {
+            Solid::Inside { offset } => f - offset,
+            Solid::Outside { offset } => offset - f,
+            Solid::Shell { thickness } => f.abs() - 0.5 * thickness,
+            Solid::EccentricShell { offset, thickness } => (f - offset).abs() - 0.5 * thickness,
+        }
+    }
+}
+
+/// A sampler of the solid's implicit function, built on a field's sampler.
+pub struct SolidSampler<'a> {
+    pub inner: Box<dyn PlaneSampler + 'a>,
+    pub solid: Solid,
+}
+
+impl PlaneSampler for SolidSampler<'_> {
+    fn grid(&self) -> &Grid {
+        self.inner.grid()
+    }
+
+    fn sample_plane(&self, k: usize, out: &mut [f64]) {
+        self.inner.sample_plane(k, out);
+        let solid = self.solid;
+        for v in out.iter_mut() {
+            *v = solid.apply(*v);
+        }
+    }
+}

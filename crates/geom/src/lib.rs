@@ -1,0 +1,18 @@
+//! Geometry and math for latticebuild.
+//!
+//! Invariant: nothing in this crate knows about manifests, stages, caches or files. Everything
+//! here is a pure function of its arguments; the writers in [`mesh_io`] write to any
+//! `std::io::Write` and never open a path themselves.
+//!
+//! Conventions shared by every module:
+//! - A scalar field is negative inside the solid, positive outside; the surface is its zero set.
+//! - Triangles wind counter-clockwise seen from outside the solid, so normals point outward.
+//! - Cell coordinates have period 1 for the TPMS library: `cos(2πx)`, not `cos(x)`.
+
+pub mod contour;
+pub mod expr;
+pub mod field;
+pub mod mesh;
+pub mod mesh_io;
+pub mod tpms;
+pub mod validate;

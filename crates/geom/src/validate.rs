@@ -1,0 +1,1 @@
+//! Mesh validators: watertightness, manifoldness, Euler characteristic, volume, area.

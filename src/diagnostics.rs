@@ -1,0 +1,1 @@
+//! User-facing diagnostics: a message, where it happened, and what would fix it.
