@@ -14,5 +14,6 @@ pub mod expr;
 pub mod field;
 pub mod mesh;
 pub mod mesh_io;
+pub mod spelling;
 pub mod tpms;
 pub mod validate;
