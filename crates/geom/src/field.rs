@@ -1,4 +1,4 @@
-//! Scalar fields sampled on regular grids, one z-plane at a time.
+//! Scalar fields sampled on regular grids, one z-plane (or a few rows of one) at a time.
 //!
 //! Invariants:
 //! - A [`Grid`] point `(i, j, k)` sits at `origin + (i, j, k) ∘ spacing`; planes are stored x
@@ -8,6 +8,8 @@
 //!   chunks evaluate their shared plane independently and still agree on every sign.
 //! - Fields never see model units or solids: [`SolidSampler`] turns a field into the implicit
 //!   function of a solid (negative inside) on the same grid.
+
+use std::ops::Range;
 
 /// A regular grid of sample points.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -22,7 +24,11 @@ impl Grid {
     /// Every count must be at least 2.
     pub fn spanning(min: [f64; 3], max: [f64; 3], counts: [usize; 3]) -> Grid {
         let spacing = std::array::from_fn(|a| (max[a] - min[a]) / (counts[a] - 1) as f64);
-        Grid { origin: min, spacing, counts }
+        Grid {
+            origin: min,
+            spacing,
+            counts,
+        }
     }
 
     /// Coordinate of sample `i` along axis `axis`.
@@ -33,7 +39,9 @@ impl Grid {
 
     /// All sample coordinates along one axis.
     pub fn axis(&self, axis: usize) -> Vec<f64> {
-        (0..self.counts[axis]).map(|i| self.coord(axis, i)).collect()
+        (0..self.counts[axis])
+            .map(|i| self.coord(axis, i))
+            .collect()
     }
 
     /// Number of samples in one z-plane.
@@ -57,8 +65,16 @@ impl Grid {
 pub trait PlaneSampler: Sync {
     /// The grid this sampler was prepared for.
     fn grid(&self) -> &Grid;
+
+    /// Writes the field's values on rows `rows` (y indices) of plane `k` into `out`
+    /// (`out.len() == rows.len() * nx`). Callers sample a plane a few rows at a time so
+    /// that what they do next with the values happens while the rows are still in cache.
+    fn sample_rows(&self, k: usize, rows: Range<usize>, out: &mut [f64]);
+
     /// Writes the field's values on plane `k` into `out` (`out.len() == grid.plane_len()`).
-    fn sample_plane(&self, k: usize, out: &mut [f64]);
+    fn sample_plane(&self, k: usize, out: &mut [f64]) {
+        self.sample_rows(k, 0..self.grid().counts[1], out);
+    }
 }
 
 /// A scalar field that can be evaluated at arbitrary points and prepared for a grid.
@@ -69,7 +85,10 @@ pub trait ScalarField: Sync + Send {
     /// A sampler for `grid`. The default evaluates point by point in blocks; fields with
     /// structure (separable trigonometric series) override it with something faster.
     fn sampler<'a>(&'a self, grid: &Grid) -> Box<dyn PlaneSampler + 'a> {
-        Box::new(PointwiseSampler { field: self, grid: *grid })
+        Box::new(PointwiseSampler {
+            field: self,
+            grid: *grid,
+        })
     }
 }
 
@@ -84,14 +103,14 @@ impl<F: ScalarField + ?Sized> PlaneSampler for PointwiseSampler<'_, F> {
         &self.grid
     }
 
-    fn sample_plane(&self, k: usize, out: &mut [f64]) {
-        let [nx, ny, _] = self.grid.counts;
+    fn sample_rows(&self, k: usize, rows: Range<usize>, out: &mut [f64]) {
+        let nx = self.grid.counts[0];
         let xs = self.grid.axis(0);
         let z = vec![self.grid.coord(2, k); nx];
         let mut y = vec![0.0; nx];
-        for j in 0..ny {
+        for (j, row) in rows.zip(out.chunks_mut(nx)) {
             y.fill(self.grid.coord(1, j));
-            self.field.eval_points(&xs, &y, &z, &mut out[j * nx..(j + 1) * nx]);
+            self.field.eval_points(&xs, &y, &z, row);
         }
     }
 }
@@ -133,8 +152,8 @@ impl PlaneSampler for SolidSampler<'_> {
         self.inner.grid()
     }
 
-    fn sample_plane(&self, k: usize, out: &mut [f64]) {
-        self.inner.sample_plane(k, out);
+    fn sample_rows(&self, k: usize, rows: Range<usize>, out: &mut [f64]) {
+        self.inner.sample_rows(k, rows, out);
         let solid = self.solid;
         for v in out.iter_mut() {
             *v = solid.apply(*v);

@@ -26,7 +26,11 @@ pub struct Surface {
 }
 
 const fn s(name: &'static str, title: &'static str, formula: &'static str) -> Surface {
-    Surface { name, title, formula }
+    Surface {
+        name,
+        title,
+        formula,
+    }
 }
 
 /// The 27 surfaces, in the order of the paper's Table 2.
@@ -231,7 +235,10 @@ pub fn lookup(name: &str) -> Option<&'static Surface> {
 
 /// The canonical name closest to a misspelled one, for "did you mean" help.
 pub fn suggest(name: &str) -> Option<&'static str> {
-    let names = LIBRARY.iter().map(|s| s.name).chain(ALIASES.iter().map(|(a, _)| *a));
+    let names = LIBRARY
+        .iter()
+        .map(|s| s.name)
+        .chain(ALIASES.iter().map(|(a, _)| *a));
     crate::spelling::closest(name, names).and_then(|n| lookup(n).map(|s| s.name))
 }
 

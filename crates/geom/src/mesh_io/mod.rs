@@ -22,7 +22,13 @@ pub enum Encoding {
 }
 
 impl Format {
-    pub const ALL: [Format; 5] = [Format::Stl, Format::Ply, Format::Obj, Format::Off, Format::Vtk];
+    pub const ALL: [Format; 5] = [
+        Format::Stl,
+        Format::Ply,
+        Format::Obj,
+        Format::Off,
+        Format::Vtk,
+    ];
 
     /// The manifest name of the format, which is also its file extension.
     pub fn name(self) -> &'static str {

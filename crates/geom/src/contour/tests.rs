@@ -1,0 +1,236 @@
+//! Contouring tests: closedness and orientation on random fields (which exercise every case,
+//! chunk seam and cap), and volumes against analytic values.
+
+use std::collections::HashMap;
+
+use super::*;
+use crate::field::{Grid, PlaneSampler};
+
+/// Samples a precomputed array, or a closure of the model position.
+struct FnSampler<F: Fn([f64; 3]) -> f64 + Sync> {
+    grid: Grid,
+    f: F,
+}
+
+impl<F: Fn([f64; 3]) -> f64 + Sync> PlaneSampler for FnSampler<F> {
+    fn grid(&self) -> &Grid {
+        &self.grid
+    }
+    fn sample_rows(&self, k: usize, rows: std::ops::Range<usize>, out: &mut [f64]) {
+        let nx = self.grid.counts[0];
+        for (j, row) in rows.zip(out.chunks_mut(nx)) {
+            for (i, v) in row.iter_mut().enumerate() {
+                *v = (self.f)([
+                    self.grid.coord(0, i),
+                    self.grid.coord(1, j),
+                    self.grid.coord(2, k),
+                ]);
+            }
+        }
+    }
+}
+
+fn run(grid: Grid, f: impl Fn([f64; 3]) -> f64 + Sync) -> Mesh {
+    contour(&FnSampler { grid, f }, &grid, &|_| {}).expect("contour")
+}
+
+/// Independent closedness check: every directed edge appears once and its reverse once, and
+/// the triangles around every vertex form one cycle. Returns the Euler characteristic.
+fn assert_closed_manifold(mesh: &Mesh) -> i64 {
+    let mut directed: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in &mesh.triangles {
+        assert!(
+            t[0] != t[1] && t[1] != t[2] && t[0] != t[2],
+            "degenerate {t:?}"
+        );
+        for k in 0..3 {
+            *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+        }
+    }
+    for (&(a, b), &n) in &directed {
+        assert_eq!(n, 1, "edge {a}->{b} used {n} times");
+        assert_eq!(
+            directed.get(&(b, a)),
+            Some(&1),
+            "edge {a}->{b} is on the boundary"
+        );
+    }
+    // Vertex links: the edges opposite each vertex must chain into a single cycle.
+    let mut link: HashMap<u32, HashMap<u32, u32>> = HashMap::new();
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            link.entry(t[k])
+                .or_default()
+                .insert(t[(k + 1) % 3], t[(k + 2) % 3]);
+        }
+    }
+    for (v, next) in &link {
+        let start = *next.keys().next().expect("vertex with a fan");
+        let (mut at, mut steps) = (start, 0);
+        loop {
+            at = next[&at];
+            steps += 1;
+            if at == start {
+                break;
+            }
+        }
+        assert_eq!(steps, next.len(), "vertex {v} has a pinched fan");
+    }
+    let mut positions: Vec<[u32; 3]> = mesh.vertices.iter().map(|p| p.map(f32::to_bits)).collect();
+    positions.sort_unstable();
+    positions.dedup();
+    assert_eq!(
+        positions.len(),
+        mesh.vertices.len(),
+        "two vertices share a position"
+    );
+    assert_eq!(link.len(), mesh.vertices.len(), "unreferenced vertices");
+    let edges = directed.len() as i64 / 2;
+    mesh.vertices.len() as i64 - edges + mesh.triangles.len() as i64
+}
+
+fn volume(mesh: &Mesh) -> f64 {
+    let p = |i: u32| mesh.vertices[i as usize].map(f64::from);
+    mesh.triangles
+        .iter()
+        .map(|t| {
+            let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
+            (a[0] * (b[1] * c[2] - b[2] * c[1])
+                + a[1] * (b[2] * c[0] - b[0] * c[2])
+                + a[2] * (b[0] * c[1] - b[1] * c[0]))
+                / 6.0
+        })
+        .sum()
+}
+
+/// A cheap, reproducible hash of a lattice point to [-1, 1).
+fn noise(i: i64, j: i64, k: i64, seed: u64) -> f64 {
+    let mut h = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        ^ (j as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
+        ^ (k as u64).wrapping_mul(0x1656_67B1_9E37_79F9)
+        ^ seed;
+    h ^= h >> 33;
+    h = h.wrapping_mul(0xFF51_AFD7_ED55_8CCD);
+    h ^= h >> 33;
+    (h >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+}
+
+#[test]
+fn random_fields_give_closed_manifold_surfaces() {
+    // Sizes chosen to cover several chunks, words of 64 columns and their edges.
+    for (seed, counts) in [
+        (1, [5, 4, 3]),
+        (2, [9, 7, 40]),
+        (3, [66, 5, 9]),
+        (4, [2, 2, 2]),
+        (5, [130, 3, 70]),
+    ] {
+        let grid = Grid::spanning([0.0; 3], [1.0, 2.0, 3.0], counts);
+        let h = grid.spacing;
+        let mesh = run(grid, |p| {
+            let idx = |a: usize| (p[a] / h[a]).round() as i64;
+            noise(idx(0), idx(1), idx(2), seed)
+        });
+        assert!(!mesh.is_empty());
+        assert_closed_manifold(&mesh);
+        assert!(
+            volume(&mesh) > 0.0,
+            "seed {seed}: outward orientation gives positive volume"
+        );
+    }
+}
+
+#[test]
+fn exact_zeros_do_not_create_coincident_vertices() {
+    // A field that is exactly zero on whole grid planes.
+    let grid = Grid::spanning([-1.0; 3], [1.0; 3], [9, 9, 9]);
+    let mesh = run(grid, |p| (p[0] * 4.0).round() * (p[1] * 4.0).round() - 0.0);
+    assert_closed_manifold(&mesh);
+}
+
+#[test]
+fn half_space_volume_is_exact() {
+    // Linear fields are reproduced exactly by linear interpolation (the plane stays clear of
+    // the samples, so the edge margin never moves a vertex): z < 0.312 − 0.01 x.
+    let grid = Grid::spanning([0.0; 3], [1.0; 3], [11, 12, 41]);
+    let mesh = run(grid, |p| p[2] - 0.312 + 0.01 * p[0]);
+    assert_eq!(assert_closed_manifold(&mesh), 2);
+    assert!(
+        (volume(&mesh) - 0.307).abs() < 1e-6,
+        "volume {}",
+        volume(&mesh)
+    );
+}
+
+#[test]
+fn ball_inside_domain_has_sphere_volume_and_genus_zero() {
+    let r = 0.7;
+    let grid = Grid::spanning([-1.0; 3], [1.0; 3], [81, 81, 81]);
+    let mesh = run(grid, |p| {
+        (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() - r
+    });
+    assert_eq!(assert_closed_manifold(&mesh), 2);
+    let exact = 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+    let h: f64 = 2.0 / 80.0;
+    assert!((volume(&mesh) - exact).abs() < 0.5 * h * h * 4.0 * std::f64::consts::PI * r * r);
+}
+
+#[test]
+fn ball_cut_by_the_box_is_capped() {
+    // The ball of radius 0.8 about a corner of the unit box: one octant of it, closed by caps.
+    let r = 0.8;
+    let grid = Grid::spanning([0.0; 3], [1.0; 3], [61, 61, 61]);
+    let mesh = run(grid, |p| {
+        (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() - r
+    });
+    assert_eq!(assert_closed_manifold(&mesh), 2);
+    let exact = 4.0 / 3.0 * std::f64::consts::PI * r * r * r / 8.0;
+    assert!(
+        (volume(&mesh) - exact).abs() < 2e-3,
+        "volume {} vs {exact}",
+        volume(&mesh)
+    );
+}
+
+#[test]
+fn full_domain_is_the_box() {
+    let grid = Grid::spanning([0.0; 3], [2.0, 3.0, 4.0], [5, 6, 7]);
+    let mesh = run(grid, |_| -1.0);
+    assert_eq!(assert_closed_manifold(&mesh), 2);
+    assert!((volume(&mesh) - 24.0).abs() < 1e-5);
+    assert!(run(grid, |_| 1.0).is_empty());
+}
+
+#[test]
+fn one_and_many_threads_give_identical_meshes() {
+    let grid = Grid::spanning([-1.0; 3], [1.0; 3], [40, 33, 90]);
+    let f = |p: [f64; 3]| {
+        use std::f64::consts::TAU;
+        (TAU * p[0]).cos() * (TAU * p[1]).sin()
+            + (TAU * p[1]).cos() * (TAU * p[2]).sin()
+            + (TAU * p[2]).cos() * (TAU * p[0]).sin()
+    };
+    let single = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("pool");
+    let many = rayon::ThreadPoolBuilder::new()
+        .num_threads(4)
+        .build()
+        .expect("pool");
+    let a = single.install(|| run(grid, f));
+    let b = many.install(|| run(grid, f));
+    assert_eq!(a, b);
+    assert_closed_manifold(&a);
+}
+
+#[test]
+fn rejects_degenerate_grids() {
+    let grid = Grid {
+        origin: [0.0; 3],
+        spacing: [1.0; 3],
+        counts: [1, 5, 5],
+    };
+    let err = contour(&FnSampler { grid, f: |_| 0.0 }, &grid, &|_| {}).unwrap_err();
+    assert_eq!(err, ContourError::TooFewSamples([1, 5, 5]));
+}
