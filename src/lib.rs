@@ -1,6 +1,14 @@
 //! latticebuild: a TOML manifest of unit cells and outputs, compiled into a DAG of cached
 //! stages that produce watertight lattice meshes. See `docs/ARCHITECTURE.md` for the map.
 
+pub mod build;
 pub mod cache;
+pub mod cli;
 pub mod diagnostics;
+pub mod files;
+pub mod graph;
 pub mod manifest;
+pub mod progress;
+pub mod report;
+pub mod stages;
+pub mod watch;

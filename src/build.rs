@@ -1,0 +1,297 @@
+//! Executes a [`Graph`] against the [`Cache`]: each node is looked up by its key, run only on
+//! a miss, and recorded; independent nodes of one level run in parallel.
+//!
+//! Invariants:
+//! - A node's key is computed from its inputs' payload hashes, so a rerun that reproduces the
+//!   same bytes stops the rebuild there (early cutoff).
+//! - Payloads are loaded only when a node that must run needs them: a fully cached build reads
+//!   no meshes, only the small write records it verifies against the files on disk.
+//! - A corrupt or missing cache entry is never fatal: the node is run again.
+//! - Results go into the cache only after the stage succeeded; a failing stage leaves the
+//!   previous files and entries in place.
+
+use std::collections::{HashMap, HashSet};
+use std::sync::Arc;
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use crate::cache::{Cache, CacheError, ContentHash, Key, KeyDescription, Lookup, explain};
+use crate::graph::{Graph, NodeId};
+use crate::stages::{MeshArtifact, OutputSink, Stage, WrittenOutput};
+
+/// Shows the progress of one long stage; see [`crate::progress`].
+pub trait Progress: Sync {
+    /// A callback advancing the bar of `node` by the steps passed to it; `steps` is the total.
+    fn start(&self, node: &str, steps: u64) -> Box<dyn Fn(usize) + Sync + '_>;
+    /// Called when the node finished, to clear its bar.
+    fn finish(&self, node: &str);
+}
+
+/// A progress display that shows nothing.
+pub struct NoProgress;
+
+impl Progress for NoProgress {
+    fn start(&self, _: &str, _: u64) -> Box<dyn Fn(usize) + Sync + '_> {
+        Box::new(|_| {})
+    }
+    fn finish(&self, _: &str) {}
+}
+
+/// How one node went.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NodeRun {
+    pub node: String,
+    pub stage: &'static str,
+    pub cached: bool,
+    pub seconds: f64,
+    /// Why it ran (empty when cached).
+    pub why: Vec<String>,
+}
+
+/// What a build produced for one output.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OutputResult {
+    pub name: String,
+    pub written: WrittenOutput,
+    /// The runs of the nodes this output depends on, in graph order.
+    pub stages: Vec<NodeRun>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum BuildError {
+    #[error(transparent)]
+    Cache(#[from] CacheError),
+    #[error("stage `{node}` failed: {message}")]
+    Stage { node: String, message: String },
+}
+
+/// A node's payload, decoded, as held in memory during one build.
+#[derive(Clone)]
+enum Value {
+    Bytes(Arc<Vec<u8>>),
+    Mesh(Arc<MeshArtifact>),
+    Written(Arc<WrittenOutput>),
+}
+
+struct Resolved {
+    key: Key,
+    desc: KeyDescription,
+    hash: ContentHash,
+    value: Option<Value>,
+}
+
+pub struct Builder<'a> {
+    pub graph: &'a Graph,
+    pub cache: &'a Cache,
+    pub sink: &'a dyn OutputSink,
+    pub progress: &'a dyn Progress,
+    resolved: HashMap<NodeId, Resolved>,
+    runs: HashMap<NodeId, NodeRun>,
+}
+
+impl<'a> Builder<'a> {
+    pub fn new(graph: &'a Graph, cache: &'a Cache, sink: &'a dyn OutputSink, progress: &'a dyn Progress) -> Self {
+        Builder { graph, cache, sink, progress, resolved: HashMap::new(), runs: HashMap::new() }
+    }
+
+    /// Builds `targets` (all outputs when empty); the caller has checked the names.
+    pub fn build(mut self, targets: &[String]) -> Result<Vec<OutputResult>, BuildError> {
+        let needed = self.graph.needed(targets).unwrap_or_default();
+        let mut level = vec![0usize; self.graph.nodes.len()];
+        for &id in &needed {
+            level[id] = self.graph.nodes[id].inputs.iter().map(|&i| level[i] + 1).max().unwrap_or(0);
+        }
+        let depth = needed.iter().map(|&id| level[id]).max().map_or(0, |d| d + 1);
+        for d in 0..depth {
+            let nodes: Vec<NodeId> = needed.iter().copied().filter(|&id| level[id] == d).collect();
+            self.run_level(&nodes)?;
+        }
+        self.collect_garbage(&needed, targets.is_empty())?;
+        let mut results = Vec::new();
+        for (name, &write) in &self.graph.outputs {
+            let Some(Value::Written(written)) = self.resolved.get(&write).and_then(|r| r.value.clone()) else {
+                continue;
+            };
+            let mut chain = Vec::new();
+            let mut stack = vec![write];
+            while let Some(id) = stack.pop() {
+                chain.push(id);
+                stack.extend(&self.graph.nodes[id].inputs);
+            }
+            chain.sort_unstable();
+            chain.dedup();
+            let stages = chain.iter().filter_map(|id| self.runs.get(id).cloned()).collect();
+            results.push(OutputResult { name: name.clone(), written: (*written).clone(), stages });
+        }
+        Ok(results)
+    }
+
+    /// Resolves one level: cache lookups first, then the misses in parallel.
+    fn run_level(&mut self, nodes: &[NodeId]) -> Result<(), BuildError> {
+        let mut to_run = Vec::new();
+        for &id in nodes {
+            let started = Instant::now();
+            let node = &self.graph.nodes[id];
+            let inputs: Vec<ContentHash> = node.inputs.iter().map(|i| self.resolved[i].hash).collect();
+            let (key, desc) = node.stage.key(&inputs).map_err(|e| BuildError::Stage {
+                node: node.name.clone(),
+                message: format!("cannot form its cache key: {e}"),
+            })?;
+            match self.lookup(id, &key)? {
+                Ok((hash, value)) => {
+                    self.cache.record(&node.name, &key, &desc, &hash)?;
+                    self.resolved.insert(id, Resolved { key, desc, hash, value });
+                    self.runs.insert(id, NodeRun {
+                        node: node.name.clone(),
+                        stage: node.stage.kind(),
+                        cached: true,
+                        seconds: started.elapsed().as_secs_f64(),
+                        why: vec![],
+                    });
+                }
+                Err(reason) => to_run.push((id, key, desc, reason)),
+            }
+        }
+        for (id, ..) in &to_run {
+            for input in self.graph.nodes[*id].inputs.clone() {
+                self.load(input)?;
+            }
+        }
+        let this = &*self;
+        let outcomes: Vec<_> = to_run
+            .into_par_iter()
+            .map(|(id, key, desc, reason)| {
+                let started = Instant::now();
+                let result = this.execute(id);
+                (id, key, desc, reason, result, started.elapsed().as_secs_f64())
+            })
+            .collect();
+        for (id, key, desc, reason, result, seconds) in outcomes {
+            let node = &self.graph.nodes[id];
+            let value = result.map_err(|message| BuildError::Stage { node: node.name.clone(), message })?;
+            let hash = self.store(&key, &value)?;
+            let mut why = reason.map_or_else(Vec::new, |r| vec![r]);
+            if why.is_empty() {
+                why = match self.cache.previous(&node.name) {
+                    Some(prev) if prev.key == key => vec!["its cache entry was missing".into()],
+                    Some(prev) => explain(&prev.description, &desc),
+                    None => vec!["it was never built".into()],
+                };
+            }
+            self.cache.record(&node.name, &key, &desc, &hash)?;
+            self.resolved.insert(id, Resolved { key, desc, hash, value: Some(value) });
+            self.runs.insert(id, NodeRun { node: node.name.clone(), stage: node.stage.kind(), cached: false, seconds, why });
+        }
+        Ok(())
+    }
+
+    /// A cache hit as `Ok((hash, value if already loaded))`, or why the node must run.
+    #[allow(clippy::type_complexity)]
+    fn lookup(&self, id: NodeId, key: &Key) -> Result<Result<(ContentHash, Option<Value>), Option<String>>, BuildError> {
+        let node = &self.graph.nodes[id];
+        let Some(hash) = self.cache.peek_hash(key) else {
+            return Ok(Err(None));
+        };
+        if !matches!(node.stage, Stage::Write(_)) {
+            return Ok(Ok((hash, None)));
+        }
+        // A write is only up to date if its files are still there, unchanged.
+        match self.cache.get(key)? {
+            Lookup::Hit { payload, hash } => match serde_json::from_slice::<WrittenOutput>(&payload) {
+                Ok(written) => match written.files.iter().find(|f| !self.sink.holds(f)) {
+                    None => Ok(Ok((hash, Some(Value::Written(Arc::new(written)))))),
+                    Some(f) => Ok(Err(Some(format!("`{}` is missing or was changed", f.path)))),
+                },
+                Err(e) => Ok(Err(Some(format!("its cache entry is unreadable: {e}")))),
+            },
+            Lookup::Corrupt { reason } => Ok(Err(Some(format!("its cache entry was corrupt ({reason})")))),
+            Lookup::Miss => Ok(Err(None)),
+        }
+    }
+
+    /// Makes sure node `id`'s value is in memory, from the cache or by running it again.
+    fn load(&mut self, id: NodeId) -> Result<(), BuildError> {
+        if self.resolved[&id].value.is_some() {
+            return Ok(());
+        }
+        let key = self.resolved[&id].key;
+        if let Lookup::Hit { payload, .. } = self.cache.get(&key)? {
+            if let Ok(value) = decode(&self.graph.nodes[id].stage, payload) {
+                self.resolved.get_mut(&id).expect("resolved").value = Some(value);
+                return Ok(());
+            }
+        }
+        // The entry went bad between lookup and load: run the node again (deterministic, so
+        // its hash and everything keyed on it stay the same).
+        for input in self.graph.nodes[id].inputs.clone() {
+            self.load(input)?;
+        }
+        let node = &self.graph.nodes[id];
+        let value = self.execute(id).map_err(|message| BuildError::Stage { node: node.name.clone(), message })?;
+        self.store(&key, &value)?;
+        self.resolved.get_mut(&id).expect("resolved").value = Some(value);
+        Ok(())
+    }
+
+    /// Runs node `id`'s stage on its inputs' values, which must be loaded.
+    fn execute(&self, id: NodeId) -> Result<Value, String> {
+        let node = &self.graph.nodes[id];
+        let input = |k: usize| self.resolved[&node.inputs[k]].value.clone().expect("inputs are loaded");
+        match &node.stage {
+            Stage::Cell(stage) => Ok(Value::Bytes(Arc::new(stage.run()?))),
+            Stage::Contour(stage) => {
+                let Value::Bytes(cell) = input(0) else { return Err("input is not a cell".into()) };
+                let advance = self.progress.start(&node.name, stage.steps());
+                let result = stage.run(&cell, &*advance);
+                self.progress.finish(&node.name);
+                Ok(Value::Mesh(Arc::new(result?)))
+            }
+            Stage::Write(stage) => {
+                let Value::Mesh(mesh) = input(0) else { return Err("input is not a mesh".into()) };
+                Ok(Value::Written(Arc::new(stage.run(&mesh, self.sink)?)))
+            }
+        }
+    }
+
+    fn store(&self, key: &Key, value: &Value) -> Result<ContentHash, BuildError> {
+        Ok(match value {
+            Value::Bytes(bytes) => self.cache.put(key, bytes)?,
+            Value::Mesh(mesh) => {
+                let head = mesh.head();
+                let [vertices, triangles] = mesh.arrays();
+                self.cache.put_parts(key, &[&head, vertices, triangles])?
+            }
+            Value::Written(written) => {
+                let json = serde_json::to_vec(&**written).expect("written output serializes");
+                self.cache.put(key, &json)?
+            }
+        })
+    }
+
+    /// Drops cache objects no node of this manifest refers to any more, so an optimization
+    /// loop over thousands of parameter values does not fill the disk.
+    fn collect_garbage(&self, needed: &[NodeId], all: bool) -> Result<(), BuildError> {
+        let mut keep: HashSet<Key> = needed.iter().map(|id| self.resolved[id].key).collect();
+        for (id, node) in self.graph.nodes.iter().enumerate() {
+            if !self.resolved.contains_key(&id) {
+                if let Some(record) = self.cache.previous(&node.name) {
+                    keep.insert(record.key);
+                }
+            }
+        }
+        let _ = all;
+        self.cache.gc(&keep)?;
+        Ok(())
+    }
+}
+
+fn decode(stage: &Stage, payload: Vec<u8>) -> Result<Value, String> {
+    match stage {
+        Stage::Cell(_) => Ok(Value::Bytes(Arc::new(payload))),
+        Stage::Contour(_) => Ok(Value::Mesh(Arc::new(MeshArtifact::decode(&payload)?))),
+        Stage::Write(_) => serde_json::from_slice(&payload)
+            .map(|w| Value::Written(Arc::new(w)))
+            .map_err(|e| e.to_string()),
+    }
+}

@@ -1,0 +1,236 @@
+//! The command line: argument parsing, the commands, and exit codes (0 ok, 1 build failure,
+//! 2 usage or manifest error). With the cache, the only module that touches the filesystem.
+
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{ArgAction, Args, Parser, Subcommand};
+
+use crate::build::{Builder, NoProgress, Progress};
+use crate::cache::Cache;
+use crate::diagnostics::render;
+use crate::files::{OutputDir, write_atomically};
+use crate::graph::Graph;
+use crate::manifest::{self, Manifest};
+use crate::progress::Bars;
+use crate::report::Report;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "latticebuild",
+    version,
+    about = "Build lattice microstructures from a TOML manifest through a cached stage DAG",
+    long_about = "latticebuild turns a TOML manifest of unit cells and outputs into watertight \
+                  lattice meshes. Stages (cell, contour, write) are cached under .latticebuild/ \
+                  next to the manifest, so a rebuild only redoes what changed."
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Build every output that is out of date (or only the named ones)
+    Build(BuildArgs),
+    /// Build, then rebuild whenever the manifest or a file it references is saved
+    Watch(BuildArgs),
+    /// Print the stage graph, marking what is cached and what is stale
+    Graph(ManifestArgs),
+    /// Remove this manifest's cache entries
+    Clean(ManifestArgs),
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct ManifestArgs {
+    /// The manifest (TOML)
+    pub manifest: PathBuf,
+    /// Override a manifest value, e.g. `--set outputs.g.offset=0.12` (repeatable)
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct BuildArgs {
+    #[command(flatten)]
+    pub manifest: ManifestArgs,
+    /// Outputs to build (default: all)
+    pub targets: Vec<String>,
+    /// Worker threads (default: one per core)
+    #[arg(short = 'j', long = "jobs", value_name = "N")]
+    pub jobs: Option<usize>,
+    /// Print nothing but errors
+    #[arg(short, long, conflicts_with = "verbose")]
+    pub quiet: bool,
+    /// Say for every stage whether it ran and why
+    #[arg(short, long, action = ArgAction::Count)]
+    pub verbose: u8,
+    /// Also write the reports as one JSON array to FILE (`-` for stdout)
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<String>,
+}
+
+/// Why a build did not succeed, with its exit code.
+pub enum Failure {
+    /// Bad manifest or arguments: exit 2. The text is already rendered.
+    Usage(String),
+    /// The build itself failed: exit 1.
+    Build(String),
+}
+
+impl Failure {
+    pub fn exit(self) -> ExitCode {
+        match self {
+            Failure::Usage(text) => {
+                eprint!("{text}");
+                ExitCode::from(2)
+            }
+            Failure::Build(text) => {
+                eprintln!("error: {text}");
+                ExitCode::from(1)
+            }
+        }
+    }
+}
+
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Build(args) => {
+            if let Err(f) = set_jobs(args.jobs) {
+                return f.exit();
+            }
+            match run_build(&args) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(f) => f.exit(),
+            }
+        }
+        Command::Watch(args) => {
+            if let Err(f) = set_jobs(args.jobs) {
+                return f.exit();
+            }
+            crate::watch::watch(&args)
+        }
+        Command::Graph(args) => match run_graph(&args) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(f) => f.exit(),
+        },
+        Command::Clean(args) => match run_clean(&args) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(f) => f.exit(),
+        },
+    }
+}
+
+fn set_jobs(jobs: Option<usize>) -> Result<(), Failure> {
+    let Some(jobs) = jobs else { return Ok(()) };
+    if jobs == 0 {
+        return Err(Failure::Usage("error: `--jobs` must be at least 1\n".into()));
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .build_global()
+        .map_err(|e| Failure::Build(format!("cannot start {jobs} worker threads: {e}")))
+}
+
+/// Loads and validates the manifest, rendering every diagnostic on failure.
+pub fn load_manifest(args: &ManifestArgs) -> Result<Manifest, Failure> {
+    manifest::load(&args.manifest, &args.set).map_err(|diags| Failure::Usage(render(&diags)))
+}
+
+fn open_cache(path: &Path, quiet: bool) -> Result<Cache, Failure> {
+    Cache::open_with(path, || {
+        if !quiet {
+            eprintln!("waiting for another build of `{}` to finish…", path.display());
+        }
+    })
+    .map_err(|e| Failure::Build(e.to_string()))
+}
+
+fn compile(manifest: &Manifest) -> Result<Graph, Failure> {
+    Graph::compile(manifest).map_err(|cycle| Failure::Usage(format!("error: {cycle}\n")))
+}
+
+/// One build: manifest to files and reports.
+pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
+    let manifest = load_manifest(&args.manifest)?;
+    let graph = compile(&manifest)?;
+    if let Err(unknown) = graph.needed(&args.targets) {
+        let names: Vec<&str> = graph.outputs.keys().map(String::as_str).collect();
+        let mut text = String::new();
+        for name in unknown {
+            text.push_str(&format!("error: no output named `{name}` in `{}`\n", args.manifest.manifest.display()));
+            match latticebuild_geom::spelling::closest(&name, names.iter().copied()) {
+                Some(s) => text.push_str(&format!("  = help: did you mean `{s}`?\n")),
+                None => text.push_str(&format!("  = help: outputs are: {}\n", names.join(", "))),
+            }
+        }
+        return Err(Failure::Usage(text));
+    }
+    let cache = open_cache(&manifest.path, args.quiet)?;
+    let sink = OutputDir { dir: manifest.out_dir.clone() };
+    let bars;
+    let progress: &dyn Progress = if !args.quiet && std::io::stderr().is_terminal() {
+        bars = Bars::new();
+        &bars
+    } else {
+        &NoProgress
+    };
+    let results = Builder::new(&graph, &cache, &sink, progress)
+        .build(&args.targets)
+        .map_err(|e| Failure::Build(e.to_string()))?;
+    let mut reports = Vec::new();
+    for result in &results {
+        if args.verbose > 0 {
+            for run in &result.stages {
+                if run.cached {
+                    eprintln!("  {}: cached", run.node);
+                } else {
+                    eprintln!("  {}: ran in {:.2} s because {}", run.node, run.seconds, run.why.join("; "));
+                }
+            }
+        }
+        let report = Report::new(&manifest, result);
+        let path = manifest.out_dir.join(format!("{}.report.json", result.name));
+        let json = serde_json::to_string_pretty(&report).expect("report serializes");
+        write_atomically(&path, &mut |w| w.write_all(json.as_bytes()))
+            .map_err(|e| Failure::Build(format!("cannot write `{}`: {e}", path.display())))?;
+        if !args.quiet {
+            eprintln!("{}", report.summary_line());
+        }
+        reports.push(report);
+    }
+    match args.report.as_deref() {
+        None => {}
+        Some("-") => {
+            let json = serde_json::to_string_pretty(&reports).expect("reports serialize");
+            println!("{json}");
+        }
+        Some(file) => {
+            let json = serde_json::to_string_pretty(&reports).expect("reports serialize");
+            write_atomically(Path::new(file), &mut |w| w.write_all(json.as_bytes()))
+                .map_err(|e| Failure::Build(format!("cannot write `{file}`: {e}")))?;
+        }
+    }
+    Ok(())
+}
+
+fn run_graph(args: &ManifestArgs) -> Result<(), Failure> {
+    let manifest = load_manifest(args)?;
+    let graph = compile(&manifest)?;
+    let cache = open_cache(&manifest.path, false)?;
+    let sink = OutputDir { dir: manifest.out_dir.clone() };
+    for line in crate::graph::status::lines(&graph, &cache, &sink) {
+        println!("{line}");
+    }
+    Ok(())
+}
+
+fn run_clean(args: &ManifestArgs) -> Result<(), Failure> {
+    let manifest = load_manifest(args)?;
+    let mut cache = open_cache(&manifest.path, false)?;
+    cache.clean().map_err(|e| Failure::Build(e.to_string()))?;
+    eprintln!("removed the cache of `{}`", manifest.path.display());
+    Ok(())
+}

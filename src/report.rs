@@ -1,0 +1,91 @@
+//! Per-output reports: `out/NAME.report.json`, the `--report` JSON array, and the one-line
+//! summary on stderr. Every number comes from our validator run on the mesh that was written.
+
+use serde::Serialize;
+
+use crate::build::OutputResult;
+use crate::manifest::Manifest;
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Bbox {
+    pub min: [f64; 3],
+    pub max: [f64; 3],
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StageReport {
+    pub stage: String,
+    pub cached: bool,
+    pub seconds: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Report {
+    pub name: String,
+    pub triangles: u64,
+    pub vertices: u64,
+    pub watertight: bool,
+    pub manifold: bool,
+    pub euler_characteristic: i64,
+    pub volume: f64,
+    pub area: f64,
+    pub volume_fraction: f64,
+    pub bbox: Bbox,
+    pub files: Vec<String>,
+    pub stages: Vec<StageReport>,
+}
+
+impl Report {
+    pub fn new(manifest: &Manifest, result: &OutputResult) -> Report {
+        let output = &manifest.outputs[&result.name];
+        let s = &result.written.summary;
+        let domain_volume: f64 = (0..3).map(|a| output.domain_max[a] - output.domain_min[a]).product();
+        Report {
+            name: result.name.clone(),
+            triangles: s.triangles,
+            vertices: s.vertices,
+            watertight: s.watertight,
+            manifold: s.manifold,
+            euler_characteristic: s.euler_characteristic,
+            volume: s.volume,
+            area: s.area,
+            volume_fraction: s.volume / domain_volume,
+            bbox: Bbox { min: s.bbox_min, max: s.bbox_max },
+            files: result
+                .written
+                .files
+                .iter()
+                .map(|f| manifest.out_dir.join(&f.path).display().to_string())
+                .collect(),
+            stages: result
+                .stages
+                .iter()
+                .map(|r| StageReport { stage: r.node.clone(), cached: r.cached, seconds: r.seconds })
+                .collect(),
+        }
+    }
+
+    /// The one-line human summary.
+    pub fn summary_line(&self) -> String {
+        let seconds: f64 = self.stages.iter().map(|s| s.seconds).sum();
+        let cached = self.stages.iter().filter(|s| s.cached).count();
+        let validity = match (self.watertight, self.manifold) {
+            (true, true) => "watertight, manifold".to_string(),
+            (w, m) => format!(
+                "{}, {}",
+                if w { "watertight" } else { "NOT watertight" },
+                if m { "manifold" } else { "NOT manifold" }
+            ),
+        };
+        format!(
+            "{}: {} triangles, {} vertices, {validity}, volume fraction {:.4} -> {} ({:.2} s, {cached} of {} stages cached)",
+            self.name,
+            self.triangles,
+            self.vertices,
+            self.volume_fraction,
+            self.files.join(", "),
+            seconds,
+            self.stages.len()
+        )
+    }
+}

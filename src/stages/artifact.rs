@@ -1,0 +1,125 @@
+//! Stage payloads: how a contoured mesh and a written output are stored in the cache.
+//!
+//! A mesh payload is `LBMESH01`, the vertex and triangle counts and the length of the summary
+//! (u64 little-endian each), the summary as JSON, then the raw vertex (`3 × f32`) and triangle
+//! (`3 × u32`) arrays. The arrays are copied as raw native bytes: the cache is per machine,
+//! and every platform we build for is little-endian (checked at compile time below).
+
+use serde::{Deserialize, Serialize};
+
+use latticebuild_geom::mesh::Mesh;
+use latticebuild_geom::validate::MeshCheck;
+
+#[cfg(not(target_endian = "little"))]
+compile_error!("mesh payloads store raw little-endian arrays");
+
+const MESH_MAGIC: &[u8; 8] = b"LBMESH01";
+
+/// What the report says about a mesh: counts, validity and measures, from our validator.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MeshSummary {
+    pub triangles: u64,
+    pub vertices: u64,
+    pub watertight: bool,
+    pub manifold: bool,
+    pub euler_characteristic: i64,
+    pub volume: f64,
+    pub area: f64,
+    pub bbox_min: [f64; 3],
+    pub bbox_max: [f64; 3],
+    pub boundary_edges: u64,
+    pub nonmanifold_edges: u64,
+    pub misoriented_edges: u64,
+    pub nonmanifold_vertices: u64,
+    pub degenerate_triangles: u64,
+    pub duplicate_positions: u64,
+}
+
+impl MeshSummary {
+    pub fn from_check(c: &MeshCheck) -> MeshSummary {
+        MeshSummary {
+            triangles: c.triangles as u64,
+            vertices: c.vertices as u64,
+            watertight: c.watertight,
+            manifold: c.manifold,
+            euler_characteristic: c.euler_characteristic,
+            volume: c.volume,
+            area: c.area,
+            bbox_min: c.bbox_min,
+            bbox_max: c.bbox_max,
+            boundary_edges: c.boundary_edges as u64,
+            nonmanifold_edges: c.nonmanifold_edges as u64,
+            misoriented_edges: c.misoriented_edges as u64,
+            nonmanifold_vertices: c.nonmanifold_vertices as u64,
+            degenerate_triangles: c.degenerate_triangles as u64,
+            duplicate_positions: c.duplicate_positions as u64,
+        }
+    }
+}
+
+/// A contoured mesh with its summary.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshArtifact {
+    pub mesh: Mesh,
+    pub summary: MeshSummary,
+}
+
+impl MeshArtifact {
+    /// The payload is `head()` followed by the two `arrays()`, written one after the other so
+    /// a 300 MB mesh is never concatenated in memory.
+    pub fn head(&self) -> Vec<u8> {
+        let summary = serde_json::to_vec(&self.summary).expect("summary serializes");
+        let mut head = Vec::with_capacity(32 + summary.len());
+        head.extend_from_slice(MESH_MAGIC);
+        head.extend_from_slice(&(self.mesh.vertices.len() as u64).to_le_bytes());
+        head.extend_from_slice(&(self.mesh.triangles.len() as u64).to_le_bytes());
+        head.extend_from_slice(&(summary.len() as u64).to_le_bytes());
+        head.extend_from_slice(&summary);
+        head
+    }
+
+    /// The raw vertex and triangle arrays that follow the head.
+    pub fn arrays(&self) -> [&[u8]; 2] {
+        [bytemuck::cast_slice(&self.mesh.vertices), bytemuck::cast_slice(&self.mesh.triangles)]
+    }
+
+    pub fn decode(payload: &[u8]) -> Result<MeshArtifact, String> {
+        let bad = |what: &str| format!("malformed mesh payload: {what}");
+        let take = |at: usize| -> Result<u64, String> {
+            let bytes = payload.get(at..at + 8).ok_or_else(|| bad("truncated header"))?;
+            Ok(u64::from_le_bytes(bytes.try_into().map_err(|_| bad("header"))?))
+        };
+        if payload.get(..8) != Some(MESH_MAGIC.as_slice()) {
+            return Err(bad("wrong magic"));
+        }
+        let (nv, nt, ns) = (take(8)? as usize, take(16)? as usize, take(24)? as usize);
+        let summary_end = 32usize.checked_add(ns).ok_or_else(|| bad("summary length"))?;
+        let vertices_end = summary_end.checked_add(nv * 12).ok_or_else(|| bad("vertex count"))?;
+        let end = vertices_end.checked_add(nt * 12).ok_or_else(|| bad("triangle count"))?;
+        if payload.len() != end {
+            return Err(bad("length does not match the counts"));
+        }
+        let summary = serde_json::from_slice(&payload[32..summary_end]).map_err(|e| bad(&e.to_string()))?;
+        let vertices = bytemuck::pod_collect_to_vec(&payload[summary_end..vertices_end]);
+        let triangles = bytemuck::pod_collect_to_vec(&payload[vertices_end..end]);
+        Ok(MeshArtifact { mesh: Mesh { vertices, triangles }, summary })
+    }
+}
+
+/// One file the write stage produced.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct WrittenFile {
+    /// Path relative to the output directory.
+    pub path: String,
+    pub format: String,
+    pub bytes: u64,
+    /// blake3 of the file's content, hex.
+    pub blake3: String,
+}
+
+/// The write stage's payload: the files and the summary of the mesh they hold.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WrittenOutput {
+    pub files: Vec<WrittenFile>,
+    pub summary: MeshSummary,
+}

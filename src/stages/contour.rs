@@ -1,0 +1,71 @@
+//! The `contour` stage: samples a cell's formula over an output's domain and contours the
+//! solid into a checked, watertight mesh.
+
+use latticebuild_geom::contour::contour;
+use latticebuild_geom::expr;
+use latticebuild_geom::field::{Grid, ScalarField, Solid, SolidSampler};
+use latticebuild_geom::validate;
+
+use super::artifact::{MeshArtifact, MeshSummary};
+use crate::cache::{KeyBuilder, Param};
+use crate::manifest::Output;
+
+pub const VERSION: u32 = 1;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContourStage {
+    pub domain_min: [f64; 3],
+    pub domain_max: [f64; 3],
+    pub cell_size: [f64; 3],
+    pub solid: Solid,
+    pub samples: [usize; 3],
+}
+
+fn vec3(v: [f64; 3]) -> Param {
+    Param::List(v.iter().map(|&x| Param::F64(x)).collect())
+}
+
+impl ContourStage {
+    pub fn new(output: &Output) -> ContourStage {
+        ContourStage {
+            domain_min: output.domain_min,
+            domain_max: output.domain_max,
+            cell_size: output.cell_size,
+            solid: output.solid,
+            samples: output.samples,
+        }
+    }
+
+    pub fn key_params(&self, key: KeyBuilder) -> KeyBuilder {
+        let (solid, offset, thickness) = match self.solid {
+            Solid::Inside { offset } => ("inside", offset, 0.0),
+            Solid::Outside { offset } => ("outside", offset, 0.0),
+            Solid::Shell { thickness } => ("shell", 0.0, thickness),
+            Solid::EccentricShell { offset, thickness } => ("eccentric_shell", offset, thickness),
+        };
+        key.param("domain.min", vec3(self.domain_min))
+            .param("domain.max", vec3(self.domain_max))
+            .param("cell_size", vec3(self.cell_size))
+            .param("solid", solid)
+            .param("offset", offset)
+            .param("thickness", thickness)
+            .param("samples", Param::List(self.samples.iter().map(|&n| Param::U64(n as u64)).collect()))
+    }
+
+    /// Number of progress steps [`ContourStage::run`] reports.
+    pub fn steps(&self) -> u64 {
+        self.samples[2] as u64 - 1
+    }
+
+    /// Contours the cell whose formula is `cell_payload`; `progress(n)` advances by steps.
+    pub fn run(&self, cell_payload: &[u8], progress: &(dyn Fn(usize) + Sync)) -> Result<MeshArtifact, String> {
+        let formula = std::str::from_utf8(cell_payload).map_err(|_| "cell payload is not UTF-8".to_string())?;
+        let field = expr::compile(formula).map_err(|e| format!("cell formula does not compile: {}", e.message))?;
+        let model = Grid::spanning(self.domain_min, self.domain_max, self.samples);
+        let cell_grid = model.scaled_down(self.cell_size);
+        let sampler = SolidSampler { inner: field.sampler(&cell_grid), solid: self.solid };
+        let mesh = contour(&sampler, &model, progress).map_err(|e| e.to_string())?;
+        let summary = MeshSummary::from_check(&validate::check(&mesh));
+        Ok(MeshArtifact { mesh, summary })
+    }
+}

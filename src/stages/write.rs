@@ -1,0 +1,69 @@
+//! The `write` stage: writes a mesh in each requested format through an [`OutputSink`].
+
+use std::io::{self, Write};
+
+use rayon::prelude::*;
+
+use latticebuild_geom::mesh_io::{self, Encoding, Format};
+
+use super::artifact::{MeshArtifact, WrittenFile, WrittenOutput};
+use crate::cache::{KeyBuilder, Param};
+use crate::manifest::Output;
+
+pub const VERSION: u32 = 1;
+
+/// Where the write stage's files go. The CLI's implementation writes each file to a temporary
+/// name and renames it into place, so a file is whole or absent.
+pub trait OutputSink: Sync {
+    /// Creates `relative` (to the output directory) from what `fill` writes, and returns its
+    /// size and blake3 (hex).
+    fn write_file(
+        &self,
+        relative: &str,
+        fill: &mut dyn FnMut(&mut dyn Write) -> io::Result<()>,
+    ) -> io::Result<(u64, String)>;
+
+    /// Whether `file` is on disk with exactly the recorded content.
+    fn holds(&self, file: &WrittenFile) -> bool;
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct WriteStage {
+    pub formats: Vec<Format>,
+    pub encoding: Encoding,
+    pub stem: String,
+}
+
+impl WriteStage {
+    pub fn new(output: &Output) -> WriteStage {
+        WriteStage { formats: output.formats.clone(), encoding: output.encoding, stem: output.stem.clone() }
+    }
+
+    pub fn key_params(&self, key: KeyBuilder) -> KeyBuilder {
+        let formats = self.formats.iter().map(|f| Param::Str(f.name().to_string())).collect();
+        key.param("formats", Param::List(formats))
+            .param("ascii", self.encoding == Encoding::Ascii)
+            .param("path", self.stem.as_str())
+    }
+
+    /// The relative path of the file for `format`.
+    pub fn path(&self, format: Format) -> String {
+        format!("{}.{}", self.stem, format.name())
+    }
+
+    /// Writes every format (in parallel: each writer streams on its own).
+    pub fn run(&self, artifact: &MeshArtifact, sink: &dyn OutputSink) -> Result<WrittenOutput, String> {
+        let files = self
+            .formats
+            .par_iter()
+            .map(|&format| {
+                let path = self.path(format);
+                let (bytes, blake3) = sink
+                    .write_file(&path, &mut |w| mesh_io::write_mesh(&artifact.mesh, format, self.encoding, w))
+                    .map_err(|e| format!("cannot write `{path}`: {e}"))?;
+                Ok(WrittenFile { path, format: format.name().to_string(), bytes, blake3 })
+            })
+            .collect::<Result<Vec<_>, String>>()?;
+        Ok(WrittenOutput { files, summary: artifact.summary.clone() })
+    }
+}
