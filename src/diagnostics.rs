@@ -1,1 +1,244 @@
 //! User-facing diagnostics: a message, where it happened, and what would fix it.
+//!
+//! Invariants:
+//! - A [`Diagnostic`] carries everything needed to show it: its location (file name, line,
+//!   column, the text of the line) is computed when it is created, so [`render`] needs no
+//!   source text and no file system.
+//! - Rendering is plain text, deterministic and free of colour, in the style of rustc and cargo:
+//!   messages are lower case, name things in backticks and end without a period.
+//!
+//! The renderer is hand-rolled rather than taken from `annotate-snippets`: we only ever show one
+//! line with one underline, and owning the ~80 lines keeps the exact text stable (it is under
+//! test) whatever a dependency's next release decides about spacing or colour.
+
+use std::fmt::Write as _;
+
+/// One problem found in user input.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Diagnostic {
+    /// What is wrong, e.g. ``unknown key `sampels` in output `g` ``.
+    pub message: String,
+    /// Where it is wrong; `None` for problems that have no place in a file (an unreadable file).
+    pub location: Option<Location>,
+    /// A short text printed after the underline, e.g. `unknown key`.
+    pub label: Option<String>,
+    /// What would fix it, e.g. ``did you mean `samples`?``.
+    pub help: Option<String>,
+    /// Further facts worth knowing, each printed as `= note: …`.
+    pub notes: Vec<String>,
+    /// The file that was being processed (the manifest), named in the closing summary line of
+    /// [`render`]. Distinct from `location.file`, which may be `--set` for an override.
+    pub origin: Option<String>,
+}
+
+/// A place in a source text, resolved to what a reader needs to see it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Location {
+    /// The file's display name, as the user gave it (or `--set` for a command-line override).
+    pub file: String,
+    /// 1-based line number.
+    pub line: usize,
+    /// 1-based column, counted in characters (not bytes).
+    pub column: usize,
+    /// The text of the line, without its line break.
+    pub source_line: String,
+    /// How many characters to underline, starting at `column` (at least 1).
+    pub underline: usize,
+}
+
+impl Diagnostic {
+    /// A diagnostic with only a message.
+    pub fn error(message: impl Into<String>) -> Diagnostic {
+        Diagnostic {
+            message: message.into(),
+            location: None,
+            label: None,
+            help: None,
+            notes: Vec::new(),
+            origin: None,
+        }
+    }
+
+    pub fn with_location(mut self, location: Location) -> Diagnostic {
+        self.location = Some(location);
+        self
+    }
+
+    pub fn with_label(mut self, label: impl Into<String>) -> Diagnostic {
+        self.label = Some(label.into());
+        self
+    }
+
+    pub fn with_help(mut self, help: impl Into<String>) -> Diagnostic {
+        self.help = Some(help.into());
+        self
+    }
+
+    pub fn with_note(mut self, note: impl Into<String>) -> Diagnostic {
+        self.notes.push(note.into());
+        self
+    }
+
+    pub fn with_origin(mut self, origin: impl Into<String>) -> Diagnostic {
+        self.origin = Some(origin.into());
+        self
+    }
+}
+
+impl Location {
+    /// The location of the byte range `span` in `text`, shown as file `file`. Spans past the
+    /// end of the text or inside a character are clamped, so any span gives a location.
+    pub fn of_span(file: &str, text: &str, span: std::ops::Range<usize>) -> Location {
+        let start = floor_char_boundary(text, span.start.min(text.len()));
+        let end = floor_char_boundary(text, span.end.clamp(start, text.len()));
+        let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
+        let line_end = text[start..].find('\n').map_or(text.len(), |i| start + i);
+        let source_line = text[line_start..line_end].trim_end_matches('\r');
+        let line = text[..start].matches('\n').count() + 1;
+        let column = text[line_start..start].chars().count() + 1;
+        // A span running onto later lines is underlined to the end of its first line only.
+        let underline_end = end.min(line_start + source_line.len()).max(start);
+        let underline = text[start..underline_end].chars().count().max(1);
+        Location {
+            file: file.to_string(),
+            line,
+            column,
+            source_line: source_line.to_string(),
+            underline,
+        }
+    }
+}
+
+fn floor_char_boundary(text: &str, mut index: usize) -> usize {
+    while !text.is_char_boundary(index) {
+        index -= 1;
+    }
+    index
+}
+
+/// Renders diagnostics as plain text, each followed by a blank line, then a closing line
+/// counting them (``error: could not load `lattice.toml` due to 2 previous errors``).
+/// An empty slice renders as an empty string.
+pub fn render(diags: &[Diagnostic]) -> String {
+    let mut out = String::new();
+    for diag in diags {
+        render_one(&mut out, diag);
+        out.push('\n');
+    }
+    if !diags.is_empty() {
+        let count = match diags.len() {
+            1 => "1 previous error".to_string(),
+            n => format!("{n} previous errors"),
+        };
+        match diags.iter().find_map(|d| d.origin.as_deref()) {
+            Some(origin) => {
+                let _ = writeln!(out, "error: could not load `{origin}` due to {count}");
+            }
+            None => {
+                let _ = writeln!(out, "error: aborting due to {count}");
+            }
+        }
+    }
+    out
+}
+
+fn render_one(out: &mut String, diag: &Diagnostic) {
+    let _ = writeln!(out, "error: {}", diag.message);
+    // The gutter is as wide as the line number, as in rustc; one column when there is no line.
+    let width = diag
+        .location
+        .as_ref()
+        .map_or(1, |l| l.line.to_string().len());
+    let pad = " ".repeat(width);
+    if let Some(loc) = &diag.location {
+        let _ = writeln!(out, "{pad}--> {}:{}:{}", loc.file, loc.line, loc.column);
+        let _ = writeln!(out, "{pad} |");
+        // Built then trimmed, so an empty source line leaves no trailing space.
+        let line = format!("{} | {}", loc.line, expand_tabs(&loc.source_line));
+        let _ = writeln!(out, "{}", line.trim_end());
+        // Tabs are shown as four spaces, so the caret offset must count them the same way.
+        let before: String = loc
+            .source_line
+            .chars()
+            .take(loc.column.saturating_sub(1))
+            .collect();
+        let indent = " ".repeat(expand_tabs(&before).chars().count());
+        let carets = "^".repeat(loc.underline.max(1));
+        match &diag.label {
+            Some(label) => {
+                let _ = writeln!(out, "{pad} | {indent}{carets} {label}");
+            }
+            None => {
+                let _ = writeln!(out, "{pad} | {indent}{carets}");
+            }
+        }
+    } else if let Some(label) = &diag.label {
+        // Without a line to underline, the label is still worth showing.
+        let _ = writeln!(out, "{pad} = note: {label}");
+    }
+    if diag.help.is_some() || !diag.notes.is_empty() {
+        let _ = writeln!(out, "{pad} |");
+        for note in &diag.notes {
+            let _ = writeln!(out, "{pad} = note: {note}");
+        }
+        if let Some(help) = &diag.help {
+            let _ = writeln!(out, "{pad} = help: {help}");
+        }
+    }
+}
+
+fn expand_tabs(text: &str) -> String {
+    text.replace('\t', "    ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn renders_like_rustc() {
+        let text = "[outputs.g]\ncell = \"a\"\n\n\n\n\n\n\n\n\n\nsampels = 64\n";
+        let span = text.find("sampels").unwrap_or(0);
+        let diag = Diagnostic::error("unknown key `sampels` in output `g`")
+            .with_location(Location::of_span("lattice.toml", text, span..span + 7))
+            .with_label("unknown key")
+            .with_help("did you mean `samples`?")
+            .with_origin("lattice.toml");
+        let expected = "\
+error: unknown key `sampels` in output `g`
+  --> lattice.toml:12:1
+   |
+12 | sampels = 64
+   | ^^^^^^^ unknown key
+   |
+   = help: did you mean `samples`?
+
+error: could not load `lattice.toml` due to 1 previous error
+";
+        assert_eq!(render(&[diag]), expected);
+    }
+
+    #[test]
+    fn columns_count_characters_and_tabs_keep_carets_aligned() {
+        let text = "a = \"é\"\tx\n";
+        let span = text.find('x').unwrap_or(0);
+        let loc = Location::of_span("f", text, span..span + 1);
+        assert_eq!((loc.line, loc.column, loc.underline), (1, 9, 1));
+        let out = render(&[Diagnostic::error("m").with_location(loc)]);
+        assert!(
+            out.contains("1 | a = \"é\"    x\n  |            ^\n"),
+            "{out}"
+        );
+        assert!(out.ends_with("error: aborting due to 1 previous error\n"));
+    }
+
+    #[test]
+    fn clamps_spans_and_stops_underlines_at_the_line_end() {
+        let text = "ab\ncd";
+        let loc = Location::of_span("f", text, 1..100);
+        assert_eq!((loc.line, loc.column, loc.underline), (1, 2, 1));
+        let loc = Location::of_span("f", text, 500..600);
+        assert_eq!((loc.line, loc.column, loc.underline), (2, 3, 1));
+        assert_eq!(render(&[]), "");
+    }
+}

@@ -1,5 +1,78 @@
 //! The manifest: TOML text in, a validated [`Manifest`] out, or every error found.
+//!
+//! Two levels, as in cargo's schema or just's unresolved recipes:
+//! 1. the raw level is toml's spanned tree ([`toml::de::DeTable`]), edited by `--set`
+//!    overrides (`overrides.rs`) and never interpreted on its own;
+//! 2. the validated level is [`Manifest`], built by `schema.rs`, in which every default is
+//!    filled in, every reference resolved and every value in range.
+//!
+//! Invariants:
+//! - Validation reports every error, not the first, in source order (the manifest first, then
+//!   each `--set` argument in command-line order). TOML syntax errors stop the process before
+//!   validation, since a recovered tree would only add errors that are not really there.
+//! - Every diagnostic cites a place (file, line, column, the line's text), computed when it is
+//!   made; overridden values are shown in their `--set` argument.
+//! - [`load`] reads the one manifest file; nothing else here does IO, and nothing does geometry.
+//! - No input makes this module panic.
 
+use std::path::Path;
+
+use toml::de::DeTable;
+
+use crate::diagnostics::Diagnostic;
+
+mod expression;
 pub mod model;
+mod overrides;
+mod schema;
+mod source;
+#[cfg(test)]
+mod tests;
 
 pub use model::*;
+
+use source::{Report, Sources};
+
+/// Reads and validates the manifest at `path`, with `--set` overrides applied.
+pub fn load(path: &Path, overrides: &[String]) -> Result<Manifest, Vec<Diagnostic>> {
+    match std::fs::read_to_string(path) {
+        Ok(text) => parse(&text, path, overrides),
+        Err(err) => {
+            let name = path.display().to_string();
+            Err(vec![
+                Diagnostic::error(format!("could not read `{name}`"))
+                    .with_note(err.to_string())
+                    .with_origin(name),
+            ])
+        }
+    }
+}
+
+/// Validates manifest `text`, with `--set` overrides applied. `path` is shown in diagnostics
+/// as given, and locates the manifest's directory (`root`) and its `out_dir`; it is not read.
+pub fn parse(text: &str, path: &Path, overrides: &[String]) -> Result<Manifest, Vec<Diagnostic>> {
+    let sources = Sources::new(path.display().to_string(), text, overrides);
+    let mut report = Report::new(&sources);
+    let overrides = overrides::parse_all(&mut report);
+
+    let (tree, syntax_errors) = DeTable::parse_recoverable(text);
+    if !syntax_errors.is_empty() {
+        for err in syntax_errors {
+            let span = err.span().unwrap_or(0..0);
+            report.at(
+                &span,
+                Diagnostic::error("invalid TOML").with_label(err.message().replace('\n', ", ")),
+            );
+        }
+        return Err(report.finish());
+    }
+
+    let mut tree = tree.into_inner();
+    for ov in &overrides {
+        overrides::apply(&mut tree, ov, &mut report);
+    }
+    match schema::validate(&tree, path, &mut report) {
+        Some(manifest) if report.is_empty() => Ok(manifest),
+        _ => Err(report.finish()),
+    }
+}

@@ -1,0 +1,963 @@
+//! The manifest schema (v1): walks the raw spanned TOML tree and builds a [`Manifest`].
+//!
+//! Invariants:
+//! - Validation reports every error, not the first: a bad value is reported and its output or
+//!   cell skipped, and the walk goes on. A [`Manifest`] is built only when nothing was reported.
+//! - Each error cites the most specific span: the value for a bad value, the key for an unknown
+//!   key or a bad name, the table header for a missing key.
+//! - No IO and no geometry: the only facts used beyond the tree are the TPMS library's names
+//!   and the format names.
+//! - The key lists below are the schema's single source of truth: unknown-key detection,
+//!   suggestions and `--set` typing ([`expects_string`]) all read them.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use latticebuild_geom::field::Solid;
+use latticebuild_geom::mesh_io::{Encoding, Format};
+use latticebuild_geom::{spelling, tpms};
+use toml::Spanned;
+use toml::de::{DeString, DeTable, DeValue};
+
+use super::expression;
+use super::model::{Cell, CellSource, Manifest, Name, Output};
+use super::source::Report;
+use crate::diagnostics::Diagnostic;
+
+type Key<'i> = Spanned<DeString<'i>>;
+type Value<'i> = Spanned<DeValue<'i>>;
+
+const TOP_KEYS: [&str; 3] = ["build", "cells", "outputs"];
+const BUILD_KEYS: [&str; 1] = ["out_dir"];
+const CELL_KEYS: [&str; 2] = ["tpms", "expr"];
+const OUTPUT_KEYS: [&str; 11] = [
+    "cell",
+    "domain",
+    "cell_size",
+    "solid",
+    "offset",
+    "thickness",
+    "samples",
+    "voxel",
+    "formats",
+    "ascii",
+    "path",
+];
+const DOMAIN_KEYS: [&str; 2] = ["min", "max"];
+const SOLIDS: [&str; 4] = ["inside", "outside", "shell", "eccentric_shell"];
+const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// The largest number of samples allowed along one axis (a guard against typos such as
+/// `voxel = 1e-9`, which would otherwise ask for an absurd grid).
+pub(crate) const MAX_SAMPLES: i64 = 100_000;
+
+/// Voxel ratios this close (relatively) to a whole number count as that number, so that
+/// `1.1 / 0.1 = 11.000000000000002` gives 11 intervals, not 12.
+const VOXEL_ROUNDING: f64 = 1e-9;
+
+/// Whether the schema expects a string at this dotted path (for typing `--set` values).
+pub(crate) fn expects_string(path: &[&str]) -> bool {
+    matches!(
+        path,
+        ["build", "out_dir"]
+            | ["cells", _, "tpms" | "expr"]
+            | ["outputs", _, "cell" | "solid" | "path"]
+    )
+}
+
+/// A value's type with its article, for "found …" labels.
+pub(crate) fn describe(value: &DeValue<'_>) -> &'static str {
+    match value {
+        DeValue::String(_) => "a string",
+        DeValue::Integer(_) => "an integer",
+        DeValue::Float(_) => "a float",
+        DeValue::Boolean(_) => "a boolean",
+        DeValue::Datetime(_) => "a date-time",
+        DeValue::Array(_) => "an array",
+        DeValue::Table(_) => "a table",
+    }
+}
+
+/// Validates the tree. `None` when anything was reported (including before this call).
+pub(crate) fn validate(
+    root: &DeTable<'_>,
+    manifest_path: &Path,
+    report: &mut Report<'_, '_>,
+) -> Option<Manifest> {
+    let mut checker = Checker { report };
+    let mut out_dir = Some("out".to_string());
+    let mut cells_table = None;
+    let mut outputs_table = None;
+    for (key, value) in root {
+        match key.get_ref().as_ref() {
+            "build" => out_dir = checker.build(value),
+            "cells" => {
+                cells_table = checker.table("cells", value, "define cells as `[cells.NAME]` tables")
+            }
+            "outputs" => {
+                outputs_table = checker.table(
+                    "outputs",
+                    value,
+                    "define outputs as `[outputs.NAME]` tables",
+                )
+            }
+            name => {
+                let message = format!("unknown top-level key `{name}`");
+                // Top-level keys are all optional, so there is no missing key to hold back.
+                let _ = checker.unknown_key(key, &TOP_KEYS, &message);
+            }
+        }
+    }
+
+    // References are checked against every defined cell name, valid or not, so that a cell
+    // with a bad value does not also make each output using it report a dangling reference.
+    let cell_names: BTreeSet<&str> = cells_table
+        .iter()
+        .flat_map(|t| t.keys())
+        .map(|k| k.get_ref().as_ref())
+        .collect();
+    let mut cells = BTreeMap::new();
+    for (key, value) in cells_table.into_iter().flatten() {
+        if let Some(cell) = checker.cell(key, value) {
+            cells.insert(cell.name.text.clone(), cell);
+        }
+    }
+    let mut outputs = BTreeMap::new();
+    for (key, value) in outputs_table.into_iter().flatten() {
+        if let Some(output) = checker.output(key, value, &cell_names) {
+            outputs.insert(output.name.text.clone(), output);
+        }
+    }
+
+    if !checker.report.is_empty() {
+        return None;
+    }
+    let root = match manifest_path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    Some(Manifest {
+        path: manifest_path.to_path_buf(),
+        out_dir: root.join(out_dir?),
+        root,
+        cells,
+        outputs,
+        inputs: Vec::new(),
+    })
+}
+
+/// The fields of one table that the schema knows, by their schema name.
+struct Fields<'t, 'i> {
+    known: BTreeMap<&'static str, (&'t Key<'i>, &'t Value<'i>)>,
+    /// Schema names that an unknown key was reported as a likely misspelling of. A missing
+    /// key is not reported again when its misspelling already was: one error, one fix.
+    misspelled: BTreeSet<&'static str>,
+}
+
+impl<'t, 'i> Fields<'t, 'i> {
+    fn get(&self, name: &str) -> Option<&(&'t Key<'i>, &'t Value<'i>)> {
+        self.known.get(name)
+    }
+
+    fn contains_key(&self, name: &str) -> bool {
+        self.known.contains_key(name)
+    }
+
+    fn misspelled(&self, name: &str) -> bool {
+        self.misspelled.contains(name)
+    }
+}
+
+struct Checker<'r, 's, 'a> {
+    report: &'r mut Report<'s, 'a>,
+}
+
+impl Checker<'_, '_, '_> {
+    // ---- sections ------------------------------------------------------------------------
+
+    fn build(&mut self, value: &Value<'_>) -> Option<String> {
+        let table = self.table("build", value, "write it as a `[build]` table")?;
+        let fields = self.fields(table, &BUILD_KEYS, "in `[build]`");
+        let Some((_, value)) = fields.get("out_dir") else {
+            return Some("out".to_string());
+        };
+        let dir = self.string("build.out_dir", value)?;
+        if dir.is_empty() {
+            self.error(
+                value.span(),
+                "`build.out_dir` is empty",
+                "expected a directory",
+                Some("omit `out_dir` to write into `out` next to the manifest"),
+            );
+            return None;
+        }
+        Some(dir.to_string())
+    }
+
+    fn cell(&mut self, key: &Key<'_>, value: &Value<'_>) -> Option<Cell> {
+        let before = self.report.len();
+        let name = key.get_ref().as_ref();
+        self.check_name("cell", key);
+        let help = format!("define it as a `[cells.{name}]` table");
+        let table = self.table(&format!("cells.{name}"), value, &help)?;
+        let fields = self.fields(table, &CELL_KEYS, &format!("in cell `{name}`"));
+        let tpms = fields.get("tpms").map(|(_, v)| self.tpms_name(name, v));
+        let expr = fields.get("expr").map(|(_, v)| self.expression(name, v));
+        let header = value.span();
+        let source = match (tpms, expr) {
+            (Some(tpms), None) => tpms.map(CellSource::Tpms),
+            (None, Some(expr)) => expr.map(CellSource::Expr),
+            (None, None) if fields.misspelled("tpms") || fields.misspelled("expr") => None,
+            (None, None) => {
+                self.error(
+                    header,
+                    &format!("cell `{name}` has no source"),
+                    "expected `tpms` or `expr`",
+                    Some(
+                        "add `tpms = \"gyroid\"` for a library surface or \
+                         `expr = \"...\"` for a formula in x, y, z",
+                    ),
+                );
+                None
+            }
+            (Some(_), Some(_)) => {
+                self.error(
+                    header,
+                    &format!("cell `{name}` has both `tpms` and `expr`"),
+                    "expected exactly one of them",
+                    Some("remove `tpms` or `expr`"),
+                );
+                None
+            }
+        };
+        if self.report.len() > before {
+            return None;
+        }
+        Some(Cell {
+            name: self.name(key),
+            source: source?,
+        })
+    }
+
+    fn output(
+        &mut self,
+        key: &Key<'_>,
+        value: &Value<'_>,
+        cells: &BTreeSet<&str>,
+    ) -> Option<Output> {
+        let before = self.report.len();
+        let name = key.get_ref().as_ref();
+        self.check_name("output", key);
+        let help = format!("define it as an `[outputs.{name}]` table");
+        let table = self.table(&format!("outputs.{name}"), value, &help)?;
+        let within = format!("in output `{name}`");
+        let fields = self.fields(table, &OUTPUT_KEYS, &within);
+        let header = value.span();
+        let path = |k: &str| format!("outputs.{name}.{k}");
+
+        let cell = match fields.get("cell") {
+            None => {
+                let help = "add `cell = \"NAME\"` naming one of the `[cells.NAME]` tables";
+                self.missing(&fields, &header, "cell", &within, "missing `cell`", help);
+                None
+            }
+            Some((_, v)) => self.cell_reference(&path("cell"), v, cells),
+        };
+        let domain = self.domain(name, &header, &within, &fields);
+        let cell_size = match fields.get("cell_size") {
+            None => Some([1.0; 3]),
+            Some((_, v)) => self.scalar_or_vec3(
+                &path("cell_size"),
+                v,
+                ("a number", "a number or an array of 3 numbers"),
+                Self::positive_number,
+            ),
+        };
+        let solid = self.solid(name, &header, &within, &fields);
+        let samples = self.samples(name, &header, &within, &fields, domain);
+        let formats = self.formats(&path("formats"), fields.get("formats"));
+        let encoding = match fields.get("ascii") {
+            None => Some(Encoding::Binary),
+            Some((_, v)) => self.boolean(&path("ascii"), v).map(|ascii| {
+                if ascii {
+                    Encoding::Ascii
+                } else {
+                    Encoding::Binary
+                }
+            }),
+        };
+        let stem = match fields.get("path") {
+            None => Some(name.to_string()),
+            Some((_, v)) => self.stem(&path("path"), v),
+        };
+
+        if self.report.len() > before {
+            return None;
+        }
+        let (domain_min, domain_max) = domain?;
+        Some(Output {
+            name: self.name(key),
+            cell: cell?,
+            domain_min,
+            domain_max,
+            cell_size: cell_size?,
+            solid: solid?,
+            samples: samples?,
+            formats: formats?,
+            encoding: encoding?,
+            stem: stem?,
+        })
+    }
+
+    // ---- cell sources ----------------------------------------------------------------------
+
+    fn tpms_name(&mut self, cell: &str, value: &Value<'_>) -> Option<String> {
+        let key = format!("cells.{cell}.tpms");
+        let text = self.string(&key, value)?;
+        if let Some(surface) = tpms::lookup(text) {
+            return Some(surface.name.to_string());
+        }
+        let help = match tpms::suggest(text) {
+            Some(name) => format!("did you mean `{name}`?"),
+            None => "the surface names are listed under \"TPMS library\" in docs/manifest.md"
+                .to_string(),
+        };
+        self.error(
+            value.span(),
+            &format!("unknown TPMS surface `{text}` in `{key}`"),
+            "not in the TPMS library",
+            Some(&help),
+        );
+        None
+    }
+
+    fn expression(&mut self, cell: &str, value: &Value<'_>) -> Option<String> {
+        let key = format!("cells.{cell}.expr");
+        let text = self.string(&key, value)?;
+        match expression::check_expression(text) {
+            Ok(()) => Some(text.to_string()),
+            Err(err) => {
+                let sources = self.report.sources();
+                let (span, diag) = expression::error_at(sources, &key, &value.span(), text, err);
+                self.report.at(&span, diag);
+                None
+            }
+        }
+    }
+
+    // ---- output keys -----------------------------------------------------------------------
+
+    fn cell_reference(
+        &mut self,
+        key: &str,
+        value: &Value<'_>,
+        cells: &BTreeSet<&str>,
+    ) -> Option<String> {
+        let name = self.string(key, value)?;
+        if cells.contains(name) {
+            return Some(name.to_string());
+        }
+        let help = match spelling::closest(name, cells.iter().copied()) {
+            Some(close) => format!("did you mean `{close}`?"),
+            None => format!("define the cell in a `[cells.{name}]` table"),
+        };
+        self.error(
+            value.span(),
+            &format!("unknown cell `{name}` in `{key}`"),
+            "no cell with this name",
+            Some(&help),
+        );
+        None
+    }
+
+    fn domain(
+        &mut self,
+        output: &str,
+        header: &Range<usize>,
+        within: &str,
+        output_fields: &Fields<'_, '_>,
+    ) -> Option<([f64; 3], [f64; 3])> {
+        let example = "{ min = [0, 0, 0], max = [1, 1, 1] }";
+        let Some((_, value)) = output_fields.get("domain") else {
+            let help = format!("add `domain = {example}` (the box to fill, in model units)");
+            self.missing(
+                output_fields,
+                header,
+                "domain",
+                within,
+                "missing `domain`",
+                &help,
+            );
+            return None;
+        };
+        let key = format!("outputs.{output}.domain");
+        let table = self.table(&key, value, &format!("write it as `domain = {example}`"))?;
+        let fields = self.fields(table, &DOMAIN_KEYS, &format!("in `{key}`"));
+        let mut corner = |corner: &str| {
+            let Some((_, v)) = fields.get(corner) else {
+                let help = format!("add `{corner} = [x, y, z]`");
+                let label = format!("missing `{corner}`");
+                let within = format!("in `{key}`");
+                self.missing(&fields, &value.span(), corner, &within, &label, &help);
+                return None;
+            };
+            self.vec3_numbers(&format!("{key}.{corner}"), v)
+        };
+        let min = corner("min");
+        let max = corner("max");
+        let ((min, min_values), (max, max_values)) = (min?, max?);
+        let mut ok = true;
+        for axis in 0..3 {
+            // Both are finite here (non-finite numbers were rejected), so `>=` is `!(<)`.
+            if min[axis] >= max[axis] {
+                ok = false;
+                let shown = self.raw(min_values[axis]);
+                self.error(
+                    max_values[axis].span(),
+                    &format!("`{key}.max` must be greater than `min` on every axis"),
+                    &format!("not greater than min {} `{shown}`", AXES[axis]),
+                    None,
+                );
+            }
+        }
+        ok.then_some((min, max))
+    }
+
+    fn solid(
+        &mut self,
+        output: &str,
+        header: &Range<usize>,
+        within: &str,
+        fields: &Fields<'_, '_>,
+    ) -> Option<Solid> {
+        let path = |k: &str| format!("outputs.{output}.{k}");
+        let kind = match fields.get("solid") {
+            None => Some("inside"),
+            Some((_, v)) => self.solid_kind(&path("solid"), v),
+        };
+        let offset_field = fields.get("offset").map(|(_, v)| *v);
+        let thickness_field = fields.get("thickness").map(|(_, v)| *v);
+        let defaulted = if fields.contains_key("solid") {
+            ""
+        } else {
+            " (the default)"
+        };
+        let Some(kind) = kind else {
+            // The solid is unknown, but its parameters can still be checked on their own.
+            if let Some(v) = offset_field {
+                self.finite_number(&path("offset"), v);
+            }
+            if let Some(v) = thickness_field {
+                self.positive_number(&path("thickness"), v, "a number");
+            }
+            return None;
+        };
+        let shell = kind == "shell" || kind == "eccentric_shell";
+        if !shell && let Some(v) = thickness_field {
+            self.error(
+                v.span(),
+                &format!("`{}` applies only to shells", path("thickness")),
+                &format!("`solid` is `{kind}`{defaulted}"),
+                Some("remove `thickness`, or set `solid = \"shell\"` or `\"eccentric_shell\"`"),
+            );
+        }
+        if kind == "shell"
+            && let Some(v) = offset_field
+        {
+            self.error(
+                v.span(),
+                &format!("`{}` does not apply to `solid = \"shell\"`", path("offset")),
+                "a shell is centred on the surface",
+                Some("use `solid = \"eccentric_shell\"` for a shell around an offset level set"),
+            );
+        }
+        let offset = match offset_field {
+            Some(v) if kind != "shell" => self.finite_number(&path("offset"), v),
+            _ => Some(0.0),
+        };
+        let thickness = match thickness_field {
+            Some(v) if shell => self.positive_number(&path("thickness"), v, "a number"),
+            Some(_) => None,
+            None if shell => {
+                let label = format!("`solid = \"{kind}\"` needs a `thickness`");
+                let help = "add `thickness = 0.2` (the shell's width in field values)";
+                self.missing(fields, header, "thickness", within, &label, help);
+                None
+            }
+            None => Some(0.0),
+        };
+        let (offset, thickness) = (offset?, thickness?);
+        Some(match kind {
+            "inside" => Solid::Inside { offset },
+            "outside" => Solid::Outside { offset },
+            "shell" => Solid::Shell { thickness },
+            _ => Solid::EccentricShell { offset, thickness },
+        })
+    }
+
+    fn solid_kind(&mut self, key: &str, value: &Value<'_>) -> Option<&'static str> {
+        let text = self.string(key, value)?;
+        if let Some(kind) = SOLIDS.iter().find(|s| **s == text) {
+            return Some(kind);
+        }
+        let help = match spelling::closest(text, SOLIDS) {
+            Some(close) => format!("did you mean `{close}`?"),
+            None => format!("expected one of {}", list(&SOLIDS)),
+        };
+        self.error(
+            value.span(),
+            &format!("unknown solid `{text}` in `{key}`"),
+            "not a kind of solid",
+            Some(&help),
+        );
+        None
+    }
+
+    fn samples(
+        &mut self,
+        output: &str,
+        header: &Range<usize>,
+        within: &str,
+        fields: &Fields<'_, '_>,
+        domain: Option<([f64; 3], [f64; 3])>,
+    ) -> Option<[usize; 3]> {
+        let path = |k: &str| format!("outputs.{output}.{k}");
+        match (fields.get("samples"), fields.get("voxel")) {
+            (None, None) if fields.misspelled("samples") || fields.misspelled("voxel") => None,
+            (None, None) => {
+                let help = "add `samples = 64` (grid points per axis) \
+                            or `voxel = 0.05` (grid spacing in model units)";
+                self.error(
+                    header.clone(),
+                    &format!("missing key `samples` or `voxel` {within}"),
+                    "missing `samples` or `voxel`",
+                    Some(help),
+                );
+                None
+            }
+            (Some((_, samples)), Some((_, voxel))) => {
+                // The one written later is the one that conflicts with the other.
+                let (later, earlier) = if voxel.span().start > samples.span().start {
+                    (voxel, "samples")
+                } else {
+                    (samples, "voxel")
+                };
+                self.error(
+                    later.span(),
+                    &format!("both `samples` and `voxel` given {within}"),
+                    &format!("`{earlier}` is already given"),
+                    Some("give either `samples` (grid points per axis) or `voxel` (grid spacing)"),
+                );
+                None
+            }
+            (Some((_, v)), None) => {
+                let counts = self.scalar_or_vec3(
+                    &path("samples"),
+                    v,
+                    ("an integer", "an integer or an array of 3 integers"),
+                    Self::sample_count,
+                )?;
+                Some(counts)
+            }
+            (None, Some((_, v))) => {
+                let key = path("voxel");
+                let voxel = self.positive_number(&key, v, "a number")?;
+                let (min, max) = domain?;
+                let mut counts = [0; 3];
+                for axis in 0..3 {
+                    let ratio = (max[axis] - min[axis]) / voxel;
+                    let intervals = if (ratio - ratio.round()).abs() <= VOXEL_ROUNDING * ratio {
+                        ratio.round()
+                    } else {
+                        ratio.ceil()
+                    };
+                    // Compared as floats first: a tiny voxel can give a ratio beyond `usize`.
+                    if intervals + 1.0 > MAX_SAMPLES as f64 {
+                        self.error(
+                            v.span(),
+                            &format!("`{key}` is too small for the domain"),
+                            &format!("gives more than {MAX_SAMPLES} samples along {}", AXES[axis]),
+                            Some("samples per axis are ceil(extent / voxel) + 1"),
+                        );
+                        return None;
+                    }
+                    counts[axis] = intervals as usize + 1;
+                }
+                Some(counts)
+            }
+        }
+    }
+
+    fn formats(
+        &mut self,
+        key: &str,
+        field: Option<&(&Key<'_>, &Value<'_>)>,
+    ) -> Option<Vec<Format>> {
+        let Some((_, value)) = field else {
+            return Some(vec![Format::Stl]);
+        };
+        let items = match value.get_ref() {
+            DeValue::Array(items) => items,
+            DeValue::String(text) => {
+                let help = format!("write a list: `formats = [\"{text}\"]`");
+                self.wrong_type(key, value, "an array of format names", Some(&help));
+                return None;
+            }
+            _ => {
+                self.wrong_type(key, value, "an array of format names", None);
+                return None;
+            }
+        };
+        if items.is_empty() {
+            self.error(
+                value.span(),
+                &format!("`{key}` is empty"),
+                "expected at least one format",
+                Some("omit `formats` to write STL, or list formats like `formats = [\"stl\"]`"),
+            );
+            return None;
+        }
+        let names = Format::ALL.map(Format::name);
+        let mut formats = Some(Vec::new());
+        for item in items.iter() {
+            let format = self.string(key, item).and_then(|text| {
+                let format = Format::from_name(text);
+                if format.is_none() {
+                    let help = match spelling::closest(text, names) {
+                        Some(close) => format!("did you mean `{close}`?"),
+                        None => format!("expected one of {}", list(&names)),
+                    };
+                    self.error(
+                        item.span(),
+                        &format!("unknown format `{text}` in `{key}`"),
+                        "not a supported format",
+                        Some(&help),
+                    );
+                }
+                format
+            });
+            formats = formats.zip(format).map(|(mut all, f)| {
+                all.push(f);
+                all
+            });
+        }
+        formats.map(|mut all| {
+            all.sort_unstable();
+            all.dedup();
+            all
+        })
+    }
+
+    fn stem(&mut self, key: &str, value: &Value<'_>) -> Option<String> {
+        let text = self.string(key, value)?;
+        let parts: Vec<&str> = text.split(['/', '\\']).collect();
+        let problem = if text.is_empty() {
+            Some(("`{key}` is empty", "expected a file name stem"))
+        } else if Path::new(text).is_absolute()
+            || text.starts_with(['/', '\\'])
+            || text.get(1..2) == Some(":")
+        {
+            Some(("`{key}` must be relative to `out_dir`", "absolute path"))
+        } else if parts.contains(&"..") {
+            Some(("`{key}` must stay inside `out_dir`", "`..` is not allowed"))
+        } else if matches!(parts.last(), Some(&"" | &".")) {
+            Some((
+                "`{key}` must end in a file name",
+                "expected a file name stem",
+            ))
+        } else {
+            None
+        };
+        if let Some((message, label)) = problem {
+            let help =
+                "give a path relative to `out_dir` without the extension, like `parts/gyroid`";
+            self.error(
+                value.span(),
+                &message.replace("{key}", key),
+                label,
+                Some(help),
+            );
+            return None;
+        }
+        Some(text.to_string())
+    }
+
+    // ---- typed values ----------------------------------------------------------------------
+
+    fn table<'t, 'i>(
+        &mut self,
+        key: &str,
+        value: &'t Value<'i>,
+        help: &str,
+    ) -> Option<&'t DeTable<'i>> {
+        match value.get_ref() {
+            DeValue::Table(table) => Some(table),
+            _ => {
+                self.wrong_type(key, value, "a table", Some(help));
+                None
+            }
+        }
+    }
+
+    fn string<'t>(&mut self, key: &str, value: &'t Value<'_>) -> Option<&'t str> {
+        match value.get_ref() {
+            DeValue::String(text) => Some(text.as_ref()),
+            _ => {
+                self.wrong_type(key, value, "a string", None);
+                None
+            }
+        }
+    }
+
+    fn boolean(&mut self, key: &str, value: &Value<'_>) -> Option<bool> {
+        match value.get_ref() {
+            DeValue::Boolean(b) => Some(*b),
+            _ => {
+                self.wrong_type(key, value, "`true` or `false`", None);
+                None
+            }
+        }
+    }
+
+    /// A finite number; integers are accepted where numbers are expected.
+    fn number(&mut self, key: &str, value: &Value<'_>, expected: &str) -> Option<f64> {
+        let number = match value.get_ref() {
+            DeValue::Integer(int) => i64::from_str_radix(int.as_str(), int.radix())
+                .map(|n| n as f64)
+                .or_else(|_| int.as_str().parse::<f64>())
+                .ok(),
+            DeValue::Float(float) => float.as_str().parse::<f64>().ok(),
+            _ => {
+                self.wrong_type(key, value, expected, None);
+                return None;
+            }
+        };
+        match number {
+            Some(n) if n.is_finite() => Some(n),
+            _ => {
+                let shown = self.raw(value);
+                self.error(
+                    value.span(),
+                    &format!("`{key}` must be a finite number"),
+                    &format!("found `{shown}`"),
+                    None,
+                );
+                None
+            }
+        }
+    }
+
+    fn finite_number(&mut self, key: &str, value: &Value<'_>) -> Option<f64> {
+        self.number(key, value, "a number")
+    }
+
+    fn positive_number(&mut self, key: &str, value: &Value<'_>, expected: &str) -> Option<f64> {
+        let n = self.number(key, value, expected)?;
+        if n > 0.0 {
+            return Some(n);
+        }
+        let shown = self.raw(value);
+        self.error(
+            value.span(),
+            &format!("`{key}` must be greater than 0"),
+            &format!("found `{shown}`"),
+            None,
+        );
+        None
+    }
+
+    fn sample_count(&mut self, key: &str, value: &Value<'_>, expected: &str) -> Option<usize> {
+        let int = match value.get_ref() {
+            DeValue::Integer(int) => int,
+            _ => {
+                self.wrong_type(key, value, expected, None);
+                return None;
+            }
+        };
+        let shown = self.raw(value);
+        let count = i64::from_str_radix(int.as_str(), int.radix()).ok();
+        let message = match count {
+            Some(n) if n < 2 => format!("`{key}` must be at least 2 per axis"),
+            Some(n) if n > MAX_SAMPLES => format!("`{key}` must be at most {MAX_SAMPLES} per axis"),
+            Some(n) => return usize::try_from(n).ok(),
+            None => format!("`{key}` is out of range"),
+        };
+        self.error(value.span(), &message, &format!("found `{shown}`"), None);
+        None
+    }
+
+    /// A scalar (used on every axis) or an array of exactly 3. `expected` is the description
+    /// of one element and of the whole value, for type errors.
+    fn scalar_or_vec3<T: Copy>(
+        &mut self,
+        key: &str,
+        value: &Value<'_>,
+        (element, whole): (&str, &str),
+        mut item: impl FnMut(&mut Self, &str, &Value<'_>, &str) -> Option<T>,
+    ) -> Option<[T; 3]> {
+        let DeValue::Array(items) = value.get_ref() else {
+            return item(self, key, value, whole).map(|v| [v; 3]);
+        };
+        if items.len() != 3 {
+            self.wrong_length(key, value, items.len());
+            return None;
+        }
+        let [x, y, z] = [&items[0], &items[1], &items[2]].map(|v| item(self, key, v, element));
+        Some([x?, y?, z?])
+    }
+
+    /// An array of exactly 3 numbers, with each element's value for citing it later.
+    fn vec3_numbers<'t, 'i>(
+        &mut self,
+        key: &str,
+        value: &'t Value<'i>,
+    ) -> Option<([f64; 3], [&'t Value<'i>; 3])> {
+        let DeValue::Array(items) = value.get_ref() else {
+            self.wrong_type(key, value, "an array of 3 numbers", None);
+            return None;
+        };
+        if items.len() != 3 {
+            self.wrong_length(key, value, items.len());
+            return None;
+        }
+        let values = [&items[0], &items[1], &items[2]];
+        let [x, y, z] = values.map(|v| self.finite_number(key, v));
+        Some(([x?, y?, z?], values))
+    }
+
+    // ---- names and keys --------------------------------------------------------------------
+
+    /// Splits a table into the fields the schema knows, reporting every other key.
+    fn fields<'t, 'i>(
+        &mut self,
+        table: &'t DeTable<'i>,
+        allowed: &[&'static str],
+        within: &str,
+    ) -> Fields<'t, 'i> {
+        let mut fields = Fields {
+            known: BTreeMap::new(),
+            misspelled: BTreeSet::new(),
+        };
+        for (key, value) in table {
+            match allowed.iter().find(|name| **name == key.get_ref().as_ref()) {
+                Some(name) => {
+                    fields.known.insert(*name, (key, value));
+                }
+                None => {
+                    let message = format!("unknown key `{}` {within}", key.get_ref());
+                    if let Some(close) = self.unknown_key(key, allowed, &message) {
+                        fields.misspelled.insert(close);
+                    }
+                }
+            }
+        }
+        fields
+    }
+
+    /// Reports an unknown key; returns the allowed name it is likely a misspelling of.
+    fn unknown_key(
+        &mut self,
+        key: &Key<'_>,
+        allowed: &[&'static str],
+        message: &str,
+    ) -> Option<&'static str> {
+        let name = key.get_ref().as_ref();
+        let close = spelling::closest(name, allowed.iter().copied());
+        let help = match close {
+            Some(close) => format!("did you mean `{close}`?"),
+            None => format!("expected one of {}", list(allowed)),
+        };
+        self.error(key.span(), message, "unknown key", Some(&help));
+        close
+    }
+
+    fn check_name(&mut self, kind: &str, key: &Key<'_>) {
+        let name = key.get_ref().as_ref();
+        let valid = !name.is_empty()
+            && name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+        if !valid {
+            self.error(
+                key.span(),
+                &format!("invalid {kind} name `{name}`"),
+                "names may contain only letters, digits, `_` and `-`",
+                None,
+            );
+        }
+    }
+
+    fn name(&self, key: &Key<'_>) -> Name {
+        let span = key.span();
+        Name {
+            text: key.get_ref().to_string(),
+            span: self.report.sources().in_manifest(&span).then_some(span),
+        }
+    }
+
+    // ---- reporting -------------------------------------------------------------------------
+
+    fn error(&mut self, span: Range<usize>, message: &str, label: &str, help: Option<&str>) {
+        let mut diag = Diagnostic::error(message).with_label(label);
+        if let Some(help) = help {
+            diag = diag.with_help(help);
+        }
+        self.report.at(&span, diag);
+    }
+
+    /// Reports a missing required key, unless a misspelling of it was already reported.
+    fn missing(
+        &mut self,
+        fields: &Fields<'_, '_>,
+        at: &Range<usize>,
+        key: &str,
+        within: &str,
+        label: &str,
+        help: &str,
+    ) {
+        if fields.misspelled(key) {
+            return;
+        }
+        let message = format!("missing key `{key}` {within}");
+        self.error(at.clone(), &message, label, Some(help));
+    }
+
+    fn wrong_type(&mut self, key: &str, value: &Value<'_>, expected: &str, help: Option<&str>) {
+        let found = describe(value.get_ref());
+        let label = format!("expected {expected}, found {found}");
+        self.error(
+            value.span(),
+            &format!("wrong type for `{key}`"),
+            &label,
+            help,
+        );
+    }
+
+    fn wrong_length(&mut self, key: &str, value: &Value<'_>, len: usize) {
+        self.error(
+            value.span(),
+            &format!("`{key}` must have 3 values (x, y, z)"),
+            &format!("found {len}"),
+            None,
+        );
+    }
+
+    /// The source text of a value, for quoting it in a label.
+    fn raw(&self, value: &Value<'_>) -> String {
+        self.report
+            .sources()
+            .slice(&value.span())
+            .unwrap_or_default()
+            .to_string()
+    }
+}
+
+/// Names as a list for help texts: `a`, `b`, `c`.
+fn list(names: &[&str]) -> String {
+    names
+        .iter()
+        .map(|n| format!("`{n}`"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}

@@ -1,0 +1,131 @@
+//! Where manifest values come from, and the collector of the diagnostics that cite them.
+//!
+//! A value is either written in the manifest file or given on the command line with `--set`.
+//! Both kinds live in one tree, so spans must say which text they index. They do it with one
+//! address space: bytes `0..=text.len()` are the manifest, and each override argument gets the
+//! range after the previous one (with a one-byte gap, so an empty argument still has an address
+//! of its own). [`Sources::locate`] turns any span back into a file, line and column.
+
+use std::ops::Range;
+
+use crate::diagnostics::{Diagnostic, Location};
+
+/// The file name shown for values that came from a `--set` argument.
+pub(crate) const OVERRIDE_FILE: &str = "--set";
+
+/// The texts spans index: the manifest and each `--set` argument.
+pub(crate) struct Sources<'a> {
+    /// The manifest's display name, as given by the caller.
+    pub(crate) name: String,
+    pub(crate) text: &'a str,
+    /// Each override argument with the address of its first byte.
+    overrides: Vec<(usize, &'a str)>,
+}
+
+impl<'a> Sources<'a> {
+    pub(crate) fn new(name: String, text: &'a str, overrides: &'a [String]) -> Sources<'a> {
+        let mut base = text.len() + 1;
+        let overrides = overrides
+            .iter()
+            .map(|arg| {
+                let entry = (base, arg.as_str());
+                base += arg.len() + 1;
+                entry
+            })
+            .collect();
+        Sources {
+            name,
+            text,
+            overrides,
+        }
+    }
+
+    /// The address of byte 0 of override `index` and its text.
+    pub(crate) fn override_arg(&self, index: usize) -> Option<(usize, &'a str)> {
+        self.overrides.get(index).copied()
+    }
+
+    pub(crate) fn override_count(&self) -> usize {
+        self.overrides.len()
+    }
+
+    /// Whether `span` is in the manifest file (rather than in a `--set` argument).
+    pub(crate) fn in_manifest(&self, span: &Range<usize>) -> bool {
+        span.start <= self.text.len()
+    }
+
+    /// The text holding a span, the file name to show for it, and the span within that text.
+    fn resolve(&self, span: &Range<usize>) -> (&str, &'a str, Range<usize>) {
+        if self.in_manifest(span) {
+            return (self.name.as_str(), self.text, span.clone());
+        }
+        // The last override starting at or before the span holds it.
+        let (base, arg) = self
+            .overrides
+            .iter()
+            .rev()
+            .find(|(base, _)| *base <= span.start)
+            .copied()
+            .unwrap_or((0, ""));
+        (
+            OVERRIDE_FILE,
+            arg,
+            span.start - base..span.end.saturating_sub(base),
+        )
+    }
+
+    /// The file, line and column of a span, with its line of text.
+    pub(crate) fn locate(&self, span: &Range<usize>) -> Location {
+        let (file, text, local) = self.resolve(span);
+        Location::of_span(file, text, local)
+    }
+
+    /// The raw source text of a span, if it lies within one text.
+    pub(crate) fn slice(&self, span: &Range<usize>) -> Option<&'a str> {
+        let (_, text, local) = self.resolve(span);
+        text.get(local)
+    }
+}
+
+/// Diagnostics found so far, each kept with the address it cites so they can be shown in
+/// source order (manifest first, then each `--set` in command-line order) whatever order the
+/// validator happened to visit things in.
+pub(crate) struct Report<'s, 'a> {
+    sources: &'s Sources<'a>,
+    found: Vec<(usize, Diagnostic)>,
+}
+
+impl<'s, 'a> Report<'s, 'a> {
+    pub(crate) fn new(sources: &'s Sources<'a>) -> Report<'s, 'a> {
+        Report {
+            sources,
+            found: Vec::new(),
+        }
+    }
+
+    pub(crate) fn sources(&self) -> &'s Sources<'a> {
+        self.sources
+    }
+
+    /// Records `diag` as found at `span`, filling in its location and origin.
+    pub(crate) fn at(&mut self, span: &Range<usize>, diag: Diagnostic) {
+        let diag = diag
+            .with_location(self.sources.locate(span))
+            .with_origin(self.sources.name.clone());
+        self.found.push((span.start, diag));
+    }
+
+    pub(crate) fn len(&self) -> usize {
+        self.found.len()
+    }
+
+    pub(crate) fn is_empty(&self) -> bool {
+        self.found.is_empty()
+    }
+
+    /// The diagnostics in source order; a stable sort keeps discovery order for equal starts.
+    pub(crate) fn finish(mut self) -> Vec<Diagnostic> {
+        self.found.sort_by_key(|(start, _)| *start);
+        self.found.into_iter().map(|(_, d)| d).collect()
+    }
+}

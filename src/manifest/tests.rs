@@ -1,0 +1,1269 @@
+//! Manifest tests: a table of invalid manifests with their exact rendered diagnostics, and
+//! valid manifests with the [`Manifest`] they must produce. One driver per table, so a change
+//! of API edits one function.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use latticebuild_geom::expr::ParseError;
+use latticebuild_geom::field::Solid;
+use latticebuild_geom::mesh_io::{Encoding, Format};
+
+use super::source::{Report, Sources};
+use super::*;
+use crate::diagnostics::render;
+
+fn strings(sets: &[&str]) -> Vec<String> {
+    sets.iter().map(|s| s.to_string()).collect()
+}
+
+fn parse_ok(text: &str, sets: &[&str]) -> Manifest {
+    match parse(text, Path::new("lattice.toml"), &strings(sets)) {
+        Ok(manifest) => manifest,
+        Err(diags) => panic!("expected a valid manifest, got:\n{}", render(&diags)),
+    }
+}
+
+fn render_errors(text: &str, sets: &[&str]) -> String {
+    match parse(text, Path::new("lattice.toml"), &strings(sets)) {
+        Ok(manifest) => format!("unexpectedly valid: {manifest:?}"),
+        Err(diags) => render(&diags),
+    }
+}
+
+/// The manifest with every name's span removed, for comparing manifests whose text differs
+/// only in layout.
+fn without_spans(mut manifest: Manifest) -> Manifest {
+    for cell in manifest.cells.values_mut() {
+        cell.name.span = None;
+    }
+    for output in manifest.outputs.values_mut() {
+        output.name.span = None;
+    }
+    manifest
+}
+
+// ---- invalid manifests ------------------------------------------------------------------------
+
+struct ErrCase {
+    name: &'static str,
+    manifest: &'static str,
+    sets: &'static [&'static str],
+    expected: &'static str,
+}
+
+/// A small valid manifest that the `--set` cases start from (output `g` starts on line 4).
+const VALID: &str = "\
+[cells.gyroid]
+tpms = \"gyroid\"
+
+[outputs.g]
+cell = \"gyroid\"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+samples = 32
+";
+
+const ERR_CASES: &[ErrCase] = &[
+    ErrCase {
+        name: "malformed toml",
+        manifest: "[outputs.g]\nsamples = [64,\n",
+        sets: &[],
+        expected: "\
+error: invalid TOML
+ --> lattice.toml:2:15
+  |
+2 | samples = [64,
+  |               ^ unclosed array, expected `]`
+
+error: could not load `lattice.toml` due to 1 previous error
+",
+    },
+    ErrCase {
+        name: "several toml syntax errors at once",
+        manifest: "a = 1\nb = \n[x\n",
+        sets: &[],
+        expected: "\
+error: invalid TOML
+ --> lattice.toml:2:5
+  |
+2 | b =
+  |     ^ string values must be quoted, expected literal string
+
+error: invalid TOML
+ --> lattice.toml:3:3
+  |
+3 | [x
+  |   ^ unclosed table, expected `]`
+
+error: could not load `lattice.toml` due to 2 previous errors
+",
+    },
+    ErrCase {
+        name: "unknown top-level table",
+        manifest: "[cells.a]\ntpms = \"gyroid\"\n\n[ouputs.g]\ncell = \"a\"\n",
+        sets: &[],
+        expected: "\
+error: unknown top-level key `ouputs`
+ --> lattice.toml:4:2
+  |
+4 | [ouputs.g]
+  |  ^^^^^^ unknown key
+  |
+  = help: did you mean `outputs`?
+
+error: could not load `lattice.toml` due to 1 previous error
+",
+    },
+    ErrCase {
+        name: "unknown top-level key without a close name",
+        manifest: "version = 1\n",
+        sets: &[],
+        expected: "\
+error: unknown top-level key `version`
+ --> lattice.toml:1:1
+  |
+1 | version = 1
+  | ^^^^^^^ unknown key
+  |
+  = help: expected one of `build`, `cells`, `outputs`
+
+error: could not load `lattice.toml` due to 1 previous error
+",
+    },
+    ErrCase {
+        // The misspelling is the only error: `samples` is not also reported missing.
+        name: "unknown key in an output, with suggestion",
+        manifest: "\
+# A gyroid block.
+[cells.a]
+tpms = \"gyroid\"
+
+[outputs.g]
+cell = \"a\"
+domain = { min = [0, 0, 0], max = [10, 10, 10] }
+cell_size = 5
+solid = \"shell\"
+thickness = 0.3
+formats = [\"stl\", \"ply\"]
+sampels = 64
+",
+        sets: &[],
+        expected: "\
+error: unknown key `sampels` in output `g`
+  --> lattice.toml:12:1
+   |
+12 | sampels = 64
+   | ^^^^^^^ unknown key
+   |
+   = help: did you mean `samples`?
+
+error: could not load `lattice.toml` due to 1 previous error
+",
+    },
+    ErrCase {
+        name: "misspelled tpms name",
+        manifest: "[cells.a]\ntpms = \"gyroyd\"\n",
+        sets: &[],
+        expected: "\
+error: unknown TPMS surface `gyroyd` in `cells.a.tpms`
+ --> lattice.toml:2:8
+  |
+2 | tpms = \"gyroyd\"
+  |        ^^^^^^^^ not in the TPMS library
+  |
+  = help: did you mean `gyroid`?
+
+error: could not load `lattice.toml` due to 1 previous error
+",
+    },
+    ErrCase {
+        name: "unknown tpms name without a close one",
+        manifest: "[cells.a]\ntpms = \"banana\"\n",
+        sets: &[],
+        expected: "\
+error: unknown TPMS surface `banana` in `cells.a.tpms`
+ --> lattice.toml:2:8
+  |
+2 | tpms = \"banana\"
+  |        ^^^^^^^^ not in the TPMS library
+  |
+  = help: the surface names are listed under \"TPMS library\" in docs/manifest.md
+
+error: could not load `lattice.toml` due to 1 previous error
+",
+    },
+    ErrCase {
+        name: "cell with neither and with both sources",
+        manifest: "[cells.a]\n\n[cells.b]\ntpms = \"p\"\nexpr = \"x\"\n",
+        sets: &[],
+        expected: "\
+error: cell `a` has no source
+ --> lattice.toml:1:1
+  |
+1 | [cells.a]
+  | ^^^^^^^^^ expected `tpms` or `expr`
+  |
+  = help: add `tpms = \"gyroid\"` for a library surface or `expr = \"...\"` for a formula in x, y, z
+
+error: cell `b` has both `tpms` and `expr`
+ --> lattice.toml:3:1
+  |
+3 | [cells.b]
+  | ^^^^^^^^^ expected exactly one of them
+  |
+  = help: remove `tpms` or `expr`
+
+error: could not load `lattice.toml` due to 2 previous errors
+",
+    },
+    ErrCase {
+        name: "missing referenced cell, with suggestion",
+        manifest: "\
+[cells.gyroid]
+tpms = \"gyroid\"
+
+[outputs.g]
+cell = \"gyriod\"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+samples = 32
+",
+        sets: &[],
+        expected: "\
+error: unknown cell `gyriod` in `outputs.g.cell`
+ --> lattice.toml:5:8
+  |
+5 | cell = \"gyriod\"
+  |        ^^^^^^^^ no cell with this name
+  |
+  = help: did you mean `gyroid`?
+
+error: could not load `lattice.toml` due to 1 previous error
+",
+    },
+    ErrCase {
+        name: "output missing every required key",
+        manifest: "[outputs.g]\n",
+        sets: &[],
+        expected: "\
+error: missing key `cell` in output `g`
+ --> lattice.toml:1:1
+  |
+1 | [outputs.g]
+  | ^^^^^^^^^^^ missing `cell`
+  |
+  = help: add `cell = \"NAME\"` naming one of the `[cells.NAME]` tables
+
+error: missing key `domain` in output `g`
+ --> lattice.toml:1:1
+  |
+1 | [outputs.g]
+  | ^^^^^^^^^^^ missing `domain`
+  |
+  = help: add `domain = { min = [0, 0, 0], max = [1, 1, 1] }` (the box to fill, in model units)
+
+error: missing key `samples` or `voxel` in output `g`
+ --> lattice.toml:1:1
+  |
+1 | [outputs.g]
+  | ^^^^^^^^^^^ missing `samples` or `voxel`
+  |
+  = help: add `samples = 64` (grid points per axis) or `voxel = 0.05` (grid spacing in model units)
+
+error: could not load `lattice.toml` due to 3 previous errors
+",
+    },
+    ErrCase {
+        name: "wrong type",
+        manifest: "\
+[cells.gyroid]
+tpms = \"gyroid\"
+
+[outputs.g]
+cell = \"gyroid\"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+samples = \"big\"
+",
+        sets: &[],
+        expected: "\
+error: wrong type for `outputs.g.samples`
+ --> lattice.toml:7:11
+  |
+7 | samples = \"big\"
+  |           ^^^^^ expected an integer or an array of 3 integers, found a string
+
+error: could not load `lattice.toml` due to 1 previous error
+",
+    },
+    ErrCase {
+        name: "float where an integer is expected",
+        manifest: "\
+[cells.gyroid]
+tpms = \"gyroid\"
+
+[outputs.g]
+cell = \"gyroid\"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+samples = 64.5
+",
+        sets: &[],
+        expected: "\
+error: wrong type for `outputs.g.samples`
+ --> lattice.toml:7:11
+  |
+7 | samples = 64.5
+  |           ^^^^ expected an integer or an array of 3 integers, found a float
+
+error: could not load `lattice.toml` due to 1 previous error
+",
+    },
+    ErrCase {
+        name: "samples out of range",
+        manifest: "\
+[cells.gyroid]
+tpms = \"gyroid\"
+
+[outputs.g]
+cell = \"gyroid\"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+samples = 1
+",
+        sets: &[],
+        expected: "\
+error: `outputs.g.samples` must be at least 2 per axis
+ --> lattice.toml:7:11
+  |
+7 | samples = 1
+  |           ^ found `1`
+
+error: could not load `lattice.toml` due to 1 previous error
+",
+    },
+    ErrCase {
+        name: "one axis of samples out of range",
+        manifest: "\
+[cells.gyroid]
+tpms = \"gyroid\"
+
+[outputs.g]
+cell = \"gyroid\"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+samples = [32, 200000, 32]
+",
+        sets: &[],
+        expected: "\
+error: `outputs.g.samples` must be at most 100000 per axis
+ --> lattice.toml:7:16
+  |
+7 | samples = [32, 200000, 32]
+  |                ^^^^^^ found `200000`
+
+error: could not load `lattice.toml` due to 1 previous error
+",
+    },
+    ErrCase {
+        name: "negative thickness",
+        manifest: "\
+[cells.gyroid]
+tpms = \"gyroid\"
+
+[outputs.g]
+cell = \"gyroid\"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+samples = 32
+solid = \"shell\"
+thickness = -1
+",
+        sets: &[],
+        expected: "\
+error: `outputs.g.thickness` must be greater than 0
+ --> lattice.toml:9:13
+  |
+9 | thickness = -1
+  |             ^^ found `-1`
+
+error: could not load `lattice.toml` due to 1 previous error
+",
+    },
+    ErrCase {
+        name: "domain min not below max",
+        manifest: "\
+[cells.gyroid]
+tpms = \"gyroid\"
+
+[outputs.g]
+cell = \"gyroid\"
+domain = { min = [0, 0, 0], max = [1, 0, -1] }
+samples = 32
+",
+        sets: &[],
+        expected: "\
+error: `outputs.g.domain.max` must be greater than `min` on every axis
+ --> lattice.toml:6:39
+  |
+6 | domain = { min = [0, 0, 0], max = [1, 0, -1] }
+  |                                       ^ not greater than min y `0`
+
+error: `outputs.g.domain.max` must be greater than `min` on every axis
+ --> lattice.toml:6:42
+  |
+6 | domain = { min = [0, 0, 0], max = [1, 0, -1] }
+  |                                          ^^ not greater than min z `0`
+
+error: could not load `lattice.toml` due to 2 previous errors
+",
+    },
+    ErrCase {
+        name: "both samples and voxel",
+        manifest: "\
+[cells.gyroid]
+tpms = \"gyroid\"
+
+[outputs.g]
+cell = \"gyroid\"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+samples = 32
+voxel = 0.1
+",
+        sets: &[],
+        expected: "\
+error: both `samples` and `voxel` given in output `g`
+ --> lattice.toml:8:9
+  |
+8 | voxel = 0.1
+  |         ^^^ `samples` is already given
+  |
+  = help: give either `samples` (grid points per axis) or `voxel` (grid spacing)
+
+error: could not load `lattice.toml` due to 1 previous error
+",
+    },
+    ErrCase {
+        name: "voxel too small for the domain",
+        manifest: "\
+[cells.gyroid]
+tpms = \"gyroid\"
+
+[outputs.g]
+cell = \"gyroid\"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+voxel = 1e-6
+",
+        sets: &[],
+        expected: "\
+error: `outputs.g.voxel` is too small for the domain
+ --> lattice.toml:7:9
+  |
+7 | voxel = 1e-6
+  |         ^^^^ gives more than 100000 samples along x
+  |
+  = help: samples per axis are ceil(extent / voxel) + 1
+
+error: could not load `lattice.toml` due to 1 previous error
+",
+    },
+    ErrCase {
+        name: "thickness with an inside solid",
+        manifest: "\
+[cells.gyroid]
+tpms = \"gyroid\"
+
+[outputs.g]
+cell = \"gyroid\"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+samples = 32
+thickness = 0.2
+",
+        sets: &[],
+        expected: "\
+error: `outputs.g.thickness` applies only to shells
+ --> lattice.toml:8:13
+  |
+8 | thickness = 0.2
+  |             ^^^ `solid` is `inside` (the default)
+  |
+  = help: remove `thickness`, or set `solid = \"shell\"` or `\"eccentric_shell\"`
+
+error: could not load `lattice.toml` due to 1 previous error
+",
+    },
+    ErrCase {
+        name: "offset with a shell",
+        manifest: "\
+[cells.gyroid]
+tpms = \"gyroid\"
+
+[outputs.g]
+cell = \"gyroid\"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+samples = 32
+solid = \"shell\"
+thickness = 0.2
+offset = 0.1
+",
+        sets: &[],
+        expected: "\
+error: `outputs.g.offset` does not apply to `solid = \"shell\"`
+  --> lattice.toml:10:10
+   |
+10 | offset = 0.1
+   |          ^^^ a shell is centred on the surface
+   |
+   = help: use `solid = \"eccentric_shell\"` for a shell around an offset level set
+
+error: could not load `lattice.toml` due to 1 previous error
+",
+    },
+    ErrCase {
+        name: "shell without thickness",
+        manifest: "\
+[cells.gyroid]
+tpms = \"gyroid\"
+
+[outputs.g]
+cell = \"gyroid\"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+samples = 32
+solid = \"shell\"
+",
+        sets: &[],
+        expected: "\
+error: missing key `thickness` in output `g`
+ --> lattice.toml:4:1
+  |
+4 | [outputs.g]
+  | ^^^^^^^^^^^ `solid = \"shell\"` needs a `thickness`
+  |
+  = help: add `thickness = 0.2` (the shell's width in field values)
+
+error: could not load `lattice.toml` due to 1 previous error
+",
+    },
+    ErrCase {
+        name: "unknown solid, formats, path and a non-finite offset",
+        manifest: "\
+[cells.gyroid]
+tpms = \"gyroid\"
+
+[outputs.g]
+cell = \"gyroid\"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+samples = 32
+solid = \"shel\"
+offset = nan
+formats = \"stl\"
+path = \"/tmp/x\"
+",
+        sets: &[],
+        expected: "\
+error: unknown solid `shel` in `outputs.g.solid`
+ --> lattice.toml:8:9
+  |
+8 | solid = \"shel\"
+  |         ^^^^^^ not a kind of solid
+  |
+  = help: did you mean `shell`?
+
+error: `outputs.g.offset` must be a finite number
+ --> lattice.toml:9:10
+  |
+9 | offset = nan
+  |          ^^^ found `nan`
+
+error: wrong type for `outputs.g.formats`
+  --> lattice.toml:10:11
+   |
+10 | formats = \"stl\"
+   |           ^^^^^ expected an array of format names, found a string
+   |
+   = help: write a list: `formats = [\"stl\"]`
+
+error: `outputs.g.path` must be relative to `out_dir`
+  --> lattice.toml:11:8
+   |
+11 | path = \"/tmp/x\"
+   |        ^^^^^^^^ absolute path
+   |
+   = help: give a path relative to `out_dir` without the extension, like `parts/gyroid`
+
+error: could not load `lattice.toml` due to 4 previous errors
+",
+    },
+    ErrCase {
+        name: "array lengths, empty formats, bad cell sizes, bool type, name and path",
+        manifest: "\
+[cells.gyroid]
+tpms = \"gyroid\"
+
+[outputs.\"my part\"]
+cell = \"gyroid\"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+samples = [2, 3]
+formats = []
+cell_size = [1, 0, \"a\"]
+ascii = 1
+path = \"a/../../b\"
+",
+        sets: &[],
+        expected: "\
+error: invalid output name `my part`
+ --> lattice.toml:4:10
+  |
+4 | [outputs.\"my part\"]
+  |          ^^^^^^^^^ names may contain only letters, digits, `_` and `-`
+
+error: `outputs.my part.samples` must have 3 values (x, y, z)
+ --> lattice.toml:7:11
+  |
+7 | samples = [2, 3]
+  |           ^^^^^^ found 2
+
+error: `outputs.my part.formats` is empty
+ --> lattice.toml:8:11
+  |
+8 | formats = []
+  |           ^^ expected at least one format
+  |
+  = help: omit `formats` to write STL, or list formats like `formats = [\"stl\"]`
+
+error: `outputs.my part.cell_size` must be greater than 0
+ --> lattice.toml:9:17
+  |
+9 | cell_size = [1, 0, \"a\"]
+  |                 ^ found `0`
+
+error: wrong type for `outputs.my part.cell_size`
+ --> lattice.toml:9:20
+  |
+9 | cell_size = [1, 0, \"a\"]
+  |                    ^^^ expected a number, found a string
+
+error: wrong type for `outputs.my part.ascii`
+  --> lattice.toml:10:9
+   |
+10 | ascii = 1
+   |         ^ expected `true` or `false`, found an integer
+
+error: `outputs.my part.path` must stay inside `out_dir`
+  --> lattice.toml:11:8
+   |
+11 | path = \"a/../../b\"
+   |        ^^^^^^^^^^^ `..` is not allowed
+   |
+   = help: give a path relative to `out_dir` without the extension, like `parts/gyroid`
+
+error: could not load `lattice.toml` due to 7 previous errors
+",
+    },
+    ErrCase {
+        name: "wrong table types",
+        manifest: "[[outputs]]\ncell = 1\n\n[build]\nout_dir = 3\nout = 1\n",
+        sets: &[],
+        expected: "\
+error: wrong type for `outputs`
+ --> lattice.toml:1:1
+  |
+1 | [[outputs]]
+  | ^^^^^^^^^^^ expected a table, found an array
+  |
+  = help: define outputs as `[outputs.NAME]` tables
+
+error: wrong type for `build.out_dir`
+ --> lattice.toml:5:11
+  |
+5 | out_dir = 3
+  |           ^ expected a string, found an integer
+
+error: unknown key `out` in `[build]`
+ --> lattice.toml:6:1
+  |
+6 | out = 1
+  | ^^^ unknown key
+  |
+  = help: expected one of `out_dir`
+
+error: could not load `lattice.toml` due to 3 previous errors
+",
+    },
+    ErrCase {
+        // Two bad outputs, written out of alphabetical order: errors come in source order.
+        name: "multiple errors at once",
+        manifest: "\
+[cells.gyroid]
+tpms = \"gyroyd\"
+
+[outputs.b]
+cell = \"gyroid\"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+samples = 1
+
+[outputs.a]
+cell = \"schwarz\"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+voxel = 0
+formats = [\"stl\", \"stp\"]
+",
+        sets: &[],
+        expected: "\
+error: unknown TPMS surface `gyroyd` in `cells.gyroid.tpms`
+ --> lattice.toml:2:8
+  |
+2 | tpms = \"gyroyd\"
+  |        ^^^^^^^^ not in the TPMS library
+  |
+  = help: did you mean `gyroid`?
+
+error: `outputs.b.samples` must be at least 2 per axis
+ --> lattice.toml:7:11
+  |
+7 | samples = 1
+  |           ^ found `1`
+
+error: unknown cell `schwarz` in `outputs.a.cell`
+  --> lattice.toml:10:8
+   |
+10 | cell = \"schwarz\"
+   |        ^^^^^^^^^ no cell with this name
+   |
+   = help: define the cell in a `[cells.schwarz]` table
+
+error: `outputs.a.voxel` must be greater than 0
+  --> lattice.toml:12:9
+   |
+12 | voxel = 0
+   |         ^ found `0`
+
+error: unknown format `stp` in `outputs.a.formats`
+  --> lattice.toml:13:19
+   |
+13 | formats = [\"stl\", \"stp\"]
+   |                   ^^^^^ not a supported format
+   |
+   = help: did you mean `stl`?
+
+error: could not load `lattice.toml` due to 5 previous errors
+",
+    },
+    ErrCase {
+        name: "malformed --set",
+        manifest: VALID,
+        sets: &["outputs.g.offset", "=3", "outputs..x=1"],
+        expected: "\
+error: invalid `--set` argument `outputs.g.offset`
+ --> --set:1:1
+  |
+1 | outputs.g.offset
+  | ^^^^^^^^^^^^^^^^ expected `dotted.key=value`
+  |
+  = help: for example `--set outputs.g.offset=0.12`
+
+error: invalid `--set` argument `=3`
+ --> --set:1:1
+  |
+1 | =3
+  | ^ expected a key before `=`
+  |
+  = help: for example `--set outputs.g.offset=0.12`
+
+error: invalid key `outputs..x` in `--set`
+ --> --set:1:1
+  |
+1 | outputs..x=1
+  | ^^^^^^^^^^ empty segment in dotted key
+  |
+  = help: write keys like `outputs.g.offset`
+
+error: could not load `lattice.toml` due to 3 previous errors
+",
+    },
+    ErrCase {
+        name: "type errors in --set values",
+        manifest: VALID,
+        sets: &["outputs.g.samples=big", "cells.gyroid.tpms=gyroyd"],
+        expected: "\
+error: wrong type for `outputs.g.samples`
+ --> --set:1:19
+  |
+1 | outputs.g.samples=big
+  |                   ^^^ expected an integer or an array of 3 integers, found a string
+
+error: unknown TPMS surface `gyroyd` in `cells.gyroid.tpms`
+ --> --set:1:19
+  |
+1 | cells.gyroid.tpms=gyroyd
+  |                   ^^^^^^ not in the TPMS library
+  |
+  = help: did you mean `gyroid`?
+
+error: could not load `lattice.toml` due to 2 previous errors
+",
+    },
+    ErrCase {
+        name: "--set values that are not TOML or not in a table",
+        manifest: VALID,
+        sets: &["outputs.g.formats=[\"ply\",", "outputs.g.cell.name=x"],
+        expected: "\
+error: invalid TOML value for `outputs.g.formats` in `--set`
+ --> --set:1:26
+  |
+1 | outputs.g.formats=[\"ply\",
+  |                          ^ unclosed array, expected `]`
+
+error: cannot set `outputs.g.cell.name`
+ --> --set:1:11
+  |
+1 | outputs.g.cell.name=x
+  |           ^^^^ `outputs.g.cell` is a string, not a table
+
+error: could not load `lattice.toml` due to 2 previous errors
+",
+    },
+    ErrCase {
+        // The file's errors come first, then each `--set` argument's, in command-line order.
+        name: "errors in the file and in --set together",
+        manifest: "[cells.a]\ntpms = \"gyroyd\"\n",
+        sets: &["cells.b.tpms=p", "cells.c.shape=1"],
+        expected: "\
+error: unknown TPMS surface `gyroyd` in `cells.a.tpms`
+ --> lattice.toml:2:8
+  |
+2 | tpms = \"gyroyd\"
+  |        ^^^^^^^^ not in the TPMS library
+  |
+  = help: did you mean `gyroid`?
+
+error: cell `c` has no source
+ --> --set:1:7
+  |
+1 | cells.c.shape=1
+  |       ^ expected `tpms` or `expr`
+  |
+  = help: add `tpms = \"gyroid\"` for a library surface or `expr = \"...\"` for a formula in x, y, z
+
+error: unknown key `shape` in cell `c`
+ --> --set:1:9
+  |
+1 | cells.c.shape=1
+  |         ^^^^^ unknown key
+  |
+  = help: expected one of `tpms`, `expr`
+
+error: could not load `lattice.toml` due to 3 previous errors
+",
+    },
+];
+
+#[test]
+fn invalid_manifests_render_exactly() {
+    let mut failures = Vec::new();
+    for case in ERR_CASES {
+        let actual = render_errors(case.manifest, case.sets);
+        if actual != case.expected {
+            failures.push(format!(
+                "--- case `{}`\n--- expected:\n{}--- actual:\n{}",
+                case.name, case.expected, actual
+            ));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} case(s) differ:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn unreadable_file_is_a_diagnostic_naming_the_path() {
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let path = dir.path().join("missing.toml");
+    let diags = load(&path, &[]).expect_err("a missing file cannot load");
+    let shown = path.display().to_string();
+    let text = render(&diags);
+    assert!(
+        text.starts_with(&format!("error: could not read `{shown}`\n  |\n  = note: ")),
+        "{text}"
+    );
+    assert!(text.ends_with(&format!(
+        "error: could not load `{shown}` due to 1 previous error\n"
+    )));
+}
+
+// ---- valid manifests --------------------------------------------------------------------------
+
+fn output(name: &str, span: Option<std::ops::Range<usize>>) -> Output {
+    Output {
+        name: Name {
+            text: name.into(),
+            span,
+        },
+        cell: "gyroid".into(),
+        domain_min: [0.0; 3],
+        domain_max: [1.0; 3],
+        cell_size: [1.0; 3],
+        solid: Solid::Inside { offset: 0.0 },
+        samples: [32; 3],
+        formats: vec![Format::Stl],
+        encoding: Encoding::Binary,
+        stem: name.into(),
+    }
+}
+
+#[test]
+fn empty_manifest_is_valid() {
+    let manifest = parse_ok("", &[]);
+    assert!(manifest.cells.is_empty() && manifest.outputs.is_empty() && manifest.inputs.is_empty());
+    assert_eq!(manifest.root, PathBuf::from("."));
+    assert_eq!(manifest.out_dir, PathBuf::from("./out"));
+}
+
+#[test]
+fn defaults_are_filled_in() {
+    let text = "[cells.gyroid]\ntpms = \"gyroid\"\n\n[outputs.g]\ncell = \"gyroid\"\n\
+                domain = { min = [0, 0, 0], max = [1, 1, 1] }\nsamples = 32\n";
+    let manifest = match parse(text, Path::new("parts/lattice.toml"), &[]) {
+        Ok(manifest) => manifest,
+        Err(diags) => panic!("{}", render(&diags)),
+    };
+    let expected = Manifest {
+        path: PathBuf::from("parts/lattice.toml"),
+        root: PathBuf::from("parts"),
+        out_dir: PathBuf::from("parts/out"),
+        cells: BTreeMap::from([(
+            "gyroid".to_string(),
+            Cell {
+                name: Name {
+                    text: "gyroid".into(),
+                    span: Some(7..13),
+                },
+                source: CellSource::Tpms("gyroid".into()),
+            },
+        )]),
+        outputs: BTreeMap::from([("g".to_string(), output("g", Some(41..42)))]),
+        inputs: Vec::new(),
+    };
+    assert_eq!(manifest, expected);
+}
+
+#[test]
+fn every_key_given_explicitly() {
+    let text = r#"
+[build]
+out_dir = "meshes"
+
+[cells.wavy]
+expr = "cos(x) + cos(y) + cos(z)"
+
+[outputs.part]
+cell = "wavy"
+domain = { min = [-1, -2.5, 0], max = [1, 2.5, 0.5] }
+cell_size = [0.5, 1, 2]
+solid = "eccentric_shell"
+offset = -0.25
+thickness = 0.3
+samples = [2, 3, 100000]
+formats = ["vtk", "stl", "vtk", "obj"]
+ascii = true
+path = "sub/part-1"
+"#;
+    let manifest = parse_ok(text, &[]);
+    assert_eq!(manifest.out_dir, PathBuf::from("./meshes"));
+    assert_eq!(
+        manifest.cells["wavy"].source,
+        CellSource::Expr("cos(x) + cos(y) + cos(z)".into())
+    );
+    let out = &manifest.outputs["part"];
+    assert_eq!(
+        (out.domain_min, out.domain_max),
+        ([-1.0, -2.5, 0.0], [1.0, 2.5, 0.5])
+    );
+    assert_eq!(out.cell_size, [0.5, 1.0, 2.0]);
+    assert_eq!(
+        out.solid,
+        Solid::EccentricShell {
+            offset: -0.25,
+            thickness: 0.3
+        }
+    );
+    assert_eq!(out.samples, [2, 3, 100000]);
+    assert_eq!(out.formats, vec![Format::Stl, Format::Obj, Format::Vtk]);
+    assert_eq!(out.encoding, Encoding::Ascii);
+    assert_eq!(out.stem, "sub/part-1");
+}
+
+#[test]
+fn scalar_cell_size_and_voxel_resolve_per_axis() {
+    let text = "[cells.gyroid]\ntpms = \"gyroid\"\n[outputs.g]\ncell = \"gyroid\"\n\
+                domain = { min = [0, 0, 0], max = [1.1, 2, 0.25] }\ncell_size = 0.5\nvoxel = 0.1\n\
+                solid = \"outside\"\noffset = 0.2\n";
+    let out = &parse_ok(text, &[]).outputs["g"];
+    assert_eq!(out.cell_size, [0.5; 3]);
+    // 1.1 / 0.1 is 11.000000000000002 in floating point: still 11 intervals, so 12 samples.
+    // 0.25 / 0.1 = 2.5 rounds up to 3 intervals, so 4 samples.
+    assert_eq!(out.samples, [12, 21, 4]);
+    assert_eq!(out.solid, Solid::Outside { offset: 0.2 });
+}
+
+#[test]
+fn tpms_aliases_store_the_canonical_name() {
+    let text = "[cells.a]\ntpms = \"schwarz-p\"\n[cells.b]\ntpms = \"Gyroid\"\n[cells.c]\ntpms = 'diamond'\n";
+    let manifest = parse_ok(text, &[]);
+    let names: Vec<_> = manifest.cells.values().map(|c| c.source.clone()).collect();
+    assert_eq!(
+        names,
+        ["p", "gyroid", "d"]
+            .map(|n| CellSource::Tpms(n.to_string()))
+            .to_vec()
+    );
+}
+
+#[test]
+fn reordering_tables_and_comments_gives_an_equal_manifest() {
+    let a = "\
+[cells.gyroid]
+tpms = \"gyroid\"
+
+[outputs.g]
+cell = \"gyroid\"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+samples = 32
+
+[outputs.h]
+cell = \"gyroid\"
+domain.min = [0, 0, 0]
+domain.max = [1, 1, 1]
+samples = 32
+";
+    let b = "\
+# Outputs first, keys shuffled, comments everywhere.
+[outputs.h]   # the second output
+samples = 32
+cell = \"gyroid\"
+[outputs.h.domain]
+max = [1, 1, 1]
+min = [0, 0, 0]
+
+[outputs.g]
+samples = 32  # per axis
+domain = { max = [1, 1, 1], min = [0, 0, 0] }
+cell = \"gyroid\"
+
+[cells]
+gyroid = { tpms = \"gyroid\" }
+";
+    let (a, b) = (parse_ok(a, &[]), parse_ok(b, &[]));
+    // Names keep their spans for late errors; only the spans may differ.
+    assert_ne!(a, b);
+    assert_eq!(without_spans(a), without_spans(b));
+}
+
+#[test]
+fn set_changes_only_the_overridden_field() {
+    let base = parse_ok(VALID, &[]);
+    let changed = parse_ok(VALID, &["outputs.g.offset=0.12"]);
+    let mut expected = base.clone();
+    if let Some(out) = expected.outputs.get_mut("g") {
+        out.solid = Solid::Inside { offset: 0.12 };
+    }
+    assert_eq!(changed, expected);
+}
+
+#[test]
+fn set_replaces_values_and_creates_keys_and_tables() {
+    let manifest = parse_ok(
+        VALID,
+        &[
+            "outputs.g.formats=[\"ply\",\"stl\"]",
+            "outputs.g.ascii=true",
+            "outputs.g.domain.max=[2, 2, 2]",
+            "cells.b.tpms=diamond",
+            "cells.c.expr = cos(x) + sin(y)",
+            "cells.gyroid.tpms=\"schwarz-d\"",
+            "build.out_dir=build dir",
+            "outputs.h.cell=b",
+            "outputs.h.domain={ min = [0, 0, 0], max = [1, 1, 1] }",
+            "outputs.h.voxel=0.5",
+        ],
+    );
+    assert_eq!(manifest.out_dir, PathBuf::from("./build dir"));
+    assert_eq!(
+        manifest.cells["gyroid"].source,
+        CellSource::Tpms("d".into())
+    );
+    assert_eq!(manifest.cells["b"].source, CellSource::Tpms("d".into()));
+    assert_eq!(
+        manifest.cells["c"].source,
+        CellSource::Expr("cos(x) + sin(y)".into())
+    );
+    // Names created by `--set` have no span in the manifest file.
+    assert_eq!(
+        manifest.cells["b"].name,
+        Name {
+            text: "b".into(),
+            span: None
+        }
+    );
+    let g = &manifest.outputs["g"];
+    assert_eq!(g.formats, vec![Format::Stl, Format::Ply]);
+    assert_eq!(g.encoding, Encoding::Ascii);
+    assert_eq!(g.domain_max, [2.0; 3]);
+    let h = &manifest.outputs["h"];
+    assert_eq!((h.cell.as_str(), h.samples), ("b", [3; 3]));
+}
+
+#[test]
+fn later_set_wins() {
+    let manifest = parse_ok(
+        VALID,
+        &["outputs.g.samples=8", "outputs.g.samples=[4, 5, 6]"],
+    );
+    assert_eq!(manifest.outputs["g"].samples, [4, 5, 6]);
+}
+
+// ---- expressions ------------------------------------------------------------------------------
+
+/// Renders the diagnostic for a parser error at `span` (in the decoded string `decoded`) in the
+/// expression whose source text is at bytes `value` of the combined sources.
+fn expression_error(
+    manifest: &str,
+    sets: &[&str],
+    value: std::ops::Range<usize>,
+    decoded: &str,
+    span: std::ops::Range<usize>,
+) -> String {
+    let sets = strings(sets);
+    let sources = Sources::new("lattice.toml".into(), manifest, &sets);
+    let err = ParseError {
+        span,
+        message: "expected `)`".into(),
+        help: Some("close the parenthesis".into()),
+    };
+    let (at, diag) = expression::error_at(&sources, "cells.a.expr", &value, decoded, err);
+    let mut report = Report::new(&sources);
+    report.at(&at, diag);
+    render(&report.finish())
+}
+
+#[test]
+fn expression_errors_map_into_plain_strings() {
+    let expected = |location: &str, line: &str, marker: &str| {
+        format!(
+            "error: invalid expression in `cells.a.expr`\n --> {location}\n  |\n1 | {line}\n  | \
+             {marker} expected `)`\n  |\n  = help: close the parenthesis\n\n\
+             error: could not load `lattice.toml` due to 1 previous error\n"
+        )
+    };
+    // A basic and a literal string without escapes: the parser's offset plus the quote.
+    for text in ["expr = \"sin(x\"", "expr = 'sin(x'"] {
+        let actual = expression_error(text, &[], 7..14, "sin(x", 3..4);
+        assert_eq!(actual, expected("lattice.toml:1:12", text, "           ^"));
+    }
+    // An escape shifts offsets, so the whole string is underlined instead.
+    let text = "expr = \"\\tsin(x\"";
+    let actual = expression_error(text, &[], 7..16, "\tsin(x", 4..5);
+    assert_eq!(
+        actual,
+        expected("lattice.toml:1:8", text, "       ^^^^^^^^^")
+    );
+    // A raw `--set` value: the offset within the argument's value.
+    let set = "cells.a.expr=sin(x";
+    let actual = expression_error("", &[set], 14..19, "sin(x", 3..4);
+    assert_eq!(actual, expected("--set:1:17", set, "                ^"));
+    // A parser span past the end of the text is clamped to the end of the string.
+    let actual = expression_error("expr = 'sin(x'", &[], 7..14, "sin(x", 40..50);
+    assert_eq!(
+        actual,
+        expected("lattice.toml:1:14", "expr = 'sin(x'", "             ^")
+    );
+}
+
+#[test]
+fn empty_expressions_are_rejected() {
+    let diags = parse("[cells.a]\nexpr = \"  \"\n", Path::new("lattice.toml"), &[])
+        .expect_err("an empty expression is invalid");
+    let loc = diags
+        .first()
+        .and_then(|d| d.location.clone())
+        .map(|l| (l.line, l.column));
+    assert_eq!(loc, Some((2, 9)), "{}", render(&diags));
+}
+
+#[test]
+#[ignore = "needs expr::parse"]
+fn expression_syntax_errors_point_inside_the_string() {
+    let text = "[cells.a]\nexpr = \"sin(x\"\n";
+    let diags = parse(text, Path::new("lattice.toml"), &[]).expect_err("`sin(x` is unbalanced");
+    let loc = diags.first().and_then(|d| d.location.clone());
+    let (line, column) = loc.map_or((0, 0), |l| (l.line, l.column));
+    // Inside the string: from `s` (column 9) to the closing quote (column 14), which is
+    // where an "unexpected end" error lands.
+    assert!(
+        line == 2 && (9..=14).contains(&column),
+        "{}",
+        render(&diags)
+    );
+}
+
+// ---- robustness -------------------------------------------------------------------------------
+
+/// Every prefix of a manifest using every key, and odd `--set` arguments, must give a manifest
+/// or diagnostics, never a panic, and every diagnostic must have a location.
+#[test]
+fn no_input_panics() {
+    let text = "\
+[build]
+out_dir = \"out\"
+[cells.\"é x\"]
+expr = \"cos(x) + 'y'\"
+[cells.g]
+tpms = 'Gyroid'
+[outputs.o]
+cell = \"g\"
+domain = { min = [-1e308, 0, 0], max = [1e308, 0x10, 1.5] }
+cell_size = [1, 2, inf]
+solid = \"eccentric_shell\"
+offset = -nan
+thickness = 9223372036854775807
+voxel = 1e-320
+formats = [\"stl\", 1, [\"ply\"]]
+ascii = 1979-05-27
+path = \"C:x\"
+";
+    let sets = strings(&[
+        "outputs.o.samples=99999999999999999999",
+        "outputs.o.domain.min.x=1",
+        "cells=1",
+        "cells.g.tpms.x=1",
+        "outputs.o.formats={",
+        "é.=",
+        "=",
+        "",
+        "outputs.o.cell=\"unterminated",
+    ]);
+    for end in (0..=text.len()).filter(|&i| text.is_char_boundary(i)) {
+        for set_count in [0, sets.len()] {
+            if let Err(diags) = parse(&text[..end], Path::new("m.toml"), &sets[..set_count]) {
+                assert!(!diags.is_empty());
+                assert!(
+                    diags.iter().all(|d| d.location.is_some()),
+                    "{}",
+                    render(&diags)
+                );
+            }
+        }
+    }
+}
+
+/// The example in the user's reference must stay a valid manifest.
+#[test]
+fn reference_example_is_valid() {
+    let doc = include_str!("../../docs/manifest.md");
+    let example = doc
+        .split("```toml\n")
+        .nth(1)
+        .and_then(|rest| rest.split("```").next())
+        .unwrap_or_default();
+    let manifest = parse_ok(example, &[]);
+    assert_eq!(manifest.outputs.len(), 2);
+    assert_eq!(manifest.outputs["wavy-core"].samples, [101; 3]);
+    assert_eq!(manifest.outputs["block"].stem, "block");
+}
