@@ -1,0 +1,117 @@
+//! Golden cases, one driver for all (see `tests/golden/README.md`):
+//! - `ok/NNNN_name/lattice.toml` must build without diagnostics; a normalized summary of every
+//!   output (counts, validity, bbox, volume and area at fixed precision) must equal
+//!   `summary.txt`.
+//! - `err/NNNN_name/lattice.toml` must fail with exit code 2 and print exactly `expected.txt`.
+//! An optional `args` file adds command-line arguments, one per line.
+//! `cargo xtask golden --bless` (or `LATTICEBUILD_BLESS=1`) rewrites the expectations.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn cases(kind: &str) -> Vec<PathBuf> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden").join(kind);
+    let mut dirs: Vec<PathBuf> = std::fs::read_dir(&root)
+        .expect("golden dir")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.join("lattice.toml").is_file())
+        .collect();
+    dirs.sort();
+    dirs
+}
+
+fn blessing() -> bool {
+    std::env::var_os("LATTICEBUILD_BLESS").is_some()
+}
+
+/// Runs the case in a scratch copy, so neither outputs nor cache land in the source tree.
+fn run_case(case: &Path, extra: &[&str]) -> std::process::Output {
+    let scratch = tempfile::tempdir().expect("tempdir");
+    std::fs::copy(case.join("lattice.toml"), scratch.path().join("lattice.toml")).expect("copy");
+    let mut args: Vec<String> = vec!["build".into(), "lattice.toml".into()];
+    if let Ok(text) = std::fs::read_to_string(case.join("args")) {
+        args.extend(text.lines().filter(|l| !l.trim().is_empty()).map(str::to_string));
+    }
+    args.extend(extra.iter().map(|s| s.to_string()));
+    Command::new(common::BIN).args(&args).current_dir(scratch.path()).output().expect("run")
+}
+
+fn check(expected_file: &Path, actual: &str, case: &Path) -> Result<(), String> {
+    if blessing() {
+        std::fs::write(expected_file, actual).expect("bless");
+        return Ok(());
+    }
+    let expected = std::fs::read_to_string(expected_file).unwrap_or_default();
+    if expected == actual {
+        Ok(())
+    } else {
+        Err(format!(
+            "{}: output differs from {}\n--- expected\n{expected}\n--- actual\n{actual}\n(run `cargo xtask golden --bless` if the change is intended)",
+            case.display(),
+            expected_file.display()
+        ))
+    }
+}
+
+/// The summary of one report, at a precision that is stable across runs.
+fn summarize(report: &serde_json::Value) -> String {
+    let num = |v: &serde_json::Value| v.as_f64().expect("number");
+    let vec3 = |v: &serde_json::Value| {
+        let a = v.as_array().expect("array");
+        format!("[{:.6}, {:.6}, {:.6}]", num(&a[0]), num(&a[1]), num(&a[2]))
+    };
+    format!(
+        "output {}\n  triangles {}\n  vertices {}\n  watertight {}\n  manifold {}\n  euler_characteristic {}\n  volume {:.6e}\n  area {:.6e}\n  volume_fraction {:.6}\n  bbox {} {}\n",
+        report["name"].as_str().expect("name"),
+        report["triangles"],
+        report["vertices"],
+        report["watertight"],
+        report["manifold"],
+        report["euler_characteristic"],
+        num(&report["volume"]),
+        num(&report["area"]),
+        num(&report["volume_fraction"]),
+        vec3(&report["bbox"]["min"]),
+        vec3(&report["bbox"]["max"]),
+    )
+}
+
+#[test]
+fn golden_ok_cases() {
+    let mut failures = Vec::new();
+    for case in cases("ok") {
+        let out = run_case(&case, &["--report", "-", "-q"]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        if !out.status.success() || !stderr.is_empty() {
+            failures.push(format!("{}: expected a clean build, got {}\n{stderr}", case.display(), out.status));
+            continue;
+        }
+        let reports: serde_json::Value = serde_json::from_slice(&out.stdout).expect("report");
+        let summary: String = reports.as_array().expect("array").iter().map(summarize).collect();
+        if let Err(e) = check(&case.join("summary.txt"), &summary, &case) {
+            failures.push(e);
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}
+
+#[test]
+fn golden_err_cases() {
+    let mut failures = Vec::new();
+    for case in cases("err") {
+        let out = run_case(&case, &[]);
+        if out.status.code() != Some(2) {
+            failures.push(format!("{}: expected exit code 2, got {}", case.display(), out.status));
+        }
+        if !out.stdout.is_empty() {
+            failures.push(format!("{}: expected nothing on stdout", case.display()));
+        }
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        if let Err(e) = check(&case.join("expected.txt"), &stderr, &case) {
+            failures.push(e);
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}
