@@ -1,0 +1,343 @@
+//! [`Store`]: content by [`Key`]; [`LocalStore`]: its first backend, a directory of entry files.
+//!
+//! The trait is the seam for sharing results between machines later (an S3-compatible object
+//! store keyed the same way): it is object-safe, has four methods, and says nothing about files.
+//!
+//! A local entry lives at `<dir>/objects/<first 2 hex digits>/<64 hex digits>` and is a fixed
+//! 48-byte header followed by the payload:
+//!
+//! | bytes  | content                                   |
+//! |--------|-------------------------------------------|
+//! | 0..4   | magic `LBC1`                              |
+//! | 4..8   | format version, u32 LE ([`FORMAT_VERSION`]) |
+//! | 8..16  | payload length, u64 LE                    |
+//! | 16..48 | blake3 of the payload                     |
+//!
+//! Invariants: an entry is whole or absent — it is written to a temporary file and renamed into
+//! place, and `get` checks magic, length and hash, so a torn, truncated or bit-flipped entry is
+//! reported as [`Lookup::Corrupt`], deleted, and never returned as a hit.
+
+use std::collections::HashSet;
+use std::fmt;
+use std::fs::{self, File};
+use std::io::{self, Read, Write};
+use std::path::{Path, PathBuf};
+
+use crate::cache::atomic::{temp_owner_pid, write_atomically};
+use crate::cache::content_hash::ContentHash;
+use crate::cache::error::CacheError;
+use crate::cache::key::Key;
+
+const MAGIC: [u8; 4] = *b"LBC1";
+/// Bump when the header layout changes; older entries then read as corrupt and are rebuilt.
+pub const FORMAT_VERSION: u32 = 1;
+const HEADER_LEN: usize = 48;
+/// Large enough that a small payload goes out in one write; a large payload bypasses the buffer
+/// and is written straight from the caller's slice, so no copy of a 300 MB mesh is made.
+const WRITE_BUFFER: usize = 1 << 20;
+
+/// Stored content by key. Implementations must make entries whole or absent, and must verify
+/// what they return: a corrupt entry is [`Lookup::Corrupt`], not a hit and not an error.
+pub trait Store: Send + Sync {
+    /// Reads and verifies the entry for `key`. A corrupt entry is removed before returning.
+    fn get(&self, key: &Key) -> Result<Lookup, CacheError>;
+    /// Stores `payload` under `key`, replacing any entry, and returns the payload's hash.
+    /// Concurrent puts of the same key all succeed.
+    fn put(&self, key: &Key, payload: &[u8]) -> Result<ContentHash, CacheError>;
+    /// Whether an entry exists, without verifying it.
+    fn contains(&self, key: &Key) -> Result<bool, CacheError>;
+    /// Removes the entry; `false` if there was none.
+    fn remove(&self, key: &Key) -> Result<bool, CacheError>;
+}
+
+/// The outcome of reading an entry.
+pub enum Lookup {
+    Hit {
+        payload: Vec<u8>,
+        hash: ContentHash,
+    },
+    Miss,
+    /// The entry existed but failed verification; it has been removed. Treat as a miss (and say
+    /// so under `-v`).
+    Corrupt {
+        reason: Corruption,
+    },
+}
+
+impl fmt::Debug for Lookup {
+    // Hand-written so that a failing test prints a payload's size, not 300 MB of numbers.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Lookup::Hit { payload, hash } => f
+                .debug_struct("Hit")
+                .field("payload_len", &payload.len())
+                .field("hash", hash)
+                .finish(),
+            Lookup::Miss => f.write_str("Miss"),
+            Lookup::Corrupt { reason } => {
+                f.debug_struct("Corrupt").field("reason", reason).finish()
+            }
+        }
+    }
+}
+
+/// Why an entry failed verification.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum Corruption {
+    #[error("not a latticebuild cache entry (bad magic)")]
+    BadMagic,
+    #[error("entry format version {found} is not {FORMAT_VERSION}")]
+    UnknownFormat { found: u32 },
+    #[error("entry is truncated: {found} bytes on disk, {expected} expected")]
+    Truncated { expected: u64, found: u64 },
+    #[error("entry has trailing data: {found} bytes on disk, {expected} expected")]
+    TrailingData { expected: u64, found: u64 },
+    #[error("entry payload of {len} bytes does not fit in memory on this machine")]
+    TooLarge { len: u64 },
+    #[error("entry payload does not match its hash")]
+    HashMismatch,
+}
+
+/// A store in a local directory. Holds no open files, so it is cheap, `Send` and `Sync`.
+#[derive(Clone, Debug)]
+pub struct LocalStore {
+    objects: PathBuf,
+}
+
+struct Header {
+    payload_len: u64,
+    hash: ContentHash,
+}
+
+enum ReadFailure {
+    Corrupt(Corruption),
+    Io(&'static str, io::Error),
+}
+
+impl From<Corruption> for ReadFailure {
+    fn from(c: Corruption) -> ReadFailure {
+        ReadFailure::Corrupt(c)
+    }
+}
+
+impl LocalStore {
+    /// A store whose entries live under `<dir>/objects/`. Directories are created on first `put`.
+    pub fn new(dir: &Path) -> LocalStore {
+        LocalStore {
+            objects: dir.join("objects"),
+        }
+    }
+
+    /// Where the entry for `key` lives (whether or not it exists).
+    pub fn entry_path(&self, key: &Key) -> PathBuf {
+        let hex = key.to_string();
+        self.objects.join(&hex[..2]).join(hex)
+    }
+
+    /// The payload hash recorded in the entry's header, reading only the header. The payload is
+    /// not verified — this is for displays such as `latticebuild graph`, where reading 300 MB to
+    /// show a hash would be absurd. `None` if the entry is absent or its header is unusable.
+    pub fn peek_hash(&self, key: &Key) -> Option<ContentHash> {
+        let mut file = File::open(self.entry_path(key)).ok()?;
+        let file_len = file.metadata().ok()?.len();
+        read_header(&mut file, file_len).ok().map(|h| h.hash)
+    }
+
+    /// Removes every object whose key is not in `keep`, and temporary files left by other
+    /// (crashed) processes; returns the number of objects removed. Files it does not recognise
+    /// are left alone. Must only run while holding the cache lock (as [`super::Cache`] does), or
+    /// another process's in-flight temporary files could be removed.
+    pub fn gc(&self, keep: &HashSet<Key>) -> Result<usize, CacheError> {
+        let my_pid = std::process::id();
+        let mut removed = 0;
+        for shard in read_dir_or_empty(&self.objects)? {
+            let Some(shard_name) = shard.file_name().to_str().map(str::to_owned) else {
+                continue;
+            };
+            let is_shard =
+                shard_name.len() == 2 && shard_name.bytes().all(|b| b.is_ascii_hexdigit());
+            if !is_shard || !shard.path().is_dir() {
+                continue;
+            }
+            for entry in read_dir_or_empty(&shard.path())? {
+                let name = entry.file_name();
+                let Some(name) = name.to_str() else { continue };
+                let path = entry.path();
+                if let Ok(key) = name.parse::<Key>() {
+                    if name.starts_with(&shard_name) && !keep.contains(&key) && remove_file(&path)?
+                    {
+                        removed += 1;
+                    }
+                } else if temp_owner_pid(name).is_some_and(|pid| pid != my_pid) {
+                    remove_file(&path)?;
+                }
+            }
+        }
+        Ok(removed)
+    }
+}
+
+impl Store for LocalStore {
+    fn get(&self, key: &Key) -> Result<Lookup, CacheError> {
+        let path = self.entry_path(key);
+        let mut file = match File::open(&path) {
+            Ok(file) => file,
+            Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(Lookup::Miss),
+            Err(e) => return Err(CacheError::io("open", &path, e)),
+        };
+        let file_len = file
+            .metadata()
+            .map_err(|e| CacheError::io("read metadata of", &path, e))?
+            .len();
+        match read_entry(&mut file, file_len) {
+            Ok((payload, hash)) => Ok(Lookup::Hit { payload, hash }),
+            Err(ReadFailure::Corrupt(reason)) => {
+                drop(file);
+                // If this fails the entry stays corrupt and is reported again next time, or is
+                // replaced by the rebuild's `put`; either way no wrong bytes are served. A
+                // concurrent `put` may have just renamed a good entry here, which we then
+                // delete: that costs one rebuild, never correctness.
+                let _ = fs::remove_file(&path);
+                Ok(Lookup::Corrupt { reason })
+            }
+            Err(ReadFailure::Io(action, e)) => Err(CacheError::io(action, &path, e)),
+        }
+    }
+
+    fn put(&self, key: &Key, payload: &[u8]) -> Result<ContentHash, CacheError> {
+        let hash = ContentHash::of(payload);
+        let path = self.entry_path(key);
+        if let Some(dir) = path.parent() {
+            fs::create_dir_all(dir).map_err(|e| CacheError::io("create directory", dir, e))?;
+        }
+        let mut header = [0u8; HEADER_LEN];
+        header[0..4].copy_from_slice(&MAGIC);
+        header[4..8].copy_from_slice(&FORMAT_VERSION.to_le_bytes());
+        header[8..16].copy_from_slice(&(payload.len() as u64).to_le_bytes());
+        header[16..48].copy_from_slice(hash.as_bytes());
+        let buffer = WRITE_BUFFER.min(HEADER_LEN + payload.len());
+        write_atomically(&path, buffer, |w| {
+            w.write_all(&header)?;
+            w.write_all(payload)
+        })?;
+        Ok(hash)
+    }
+
+    fn contains(&self, key: &Key) -> Result<bool, CacheError> {
+        let path = self.entry_path(key);
+        match fs::metadata(&path) {
+            Ok(meta) => Ok(meta.is_file()),
+            Err(e) if e.kind() == io::ErrorKind::NotFound => Ok(false),
+            Err(e) => Err(CacheError::io("read metadata of", &path, e)),
+        }
+    }
+
+    fn remove(&self, key: &Key) -> Result<bool, CacheError> {
+        remove_file(&self.entry_path(key))
+    }
+}
+
+/// Reads and checks the header, including that the file is exactly as long as it says.
+fn read_header(file: &mut File, file_len: u64) -> Result<Header, ReadFailure> {
+    if file_len < HEADER_LEN as u64 {
+        return Err(Corruption::Truncated {
+            expected: HEADER_LEN as u64,
+            found: file_len,
+        }
+        .into());
+    }
+    let mut header = [0u8; HEADER_LEN];
+    file.read_exact(&mut header).map_err(|e| match e.kind() {
+        // The file shrank after we looked at its length: it is not a whole entry.
+        io::ErrorKind::UnexpectedEof => Corruption::Truncated {
+            expected: HEADER_LEN as u64,
+            found: file_len,
+        }
+        .into(),
+        _ => ReadFailure::Io("read", e),
+    })?;
+    if header[0..4] != MAGIC {
+        return Err(Corruption::BadMagic.into());
+    }
+    let version = u32::from_le_bytes(field(&header, 4));
+    if version != FORMAT_VERSION {
+        return Err(Corruption::UnknownFormat { found: version }.into());
+    }
+    let payload_len = u64::from_le_bytes(field(&header, 8));
+    let hash = ContentHash::from_bytes(field(&header, 16));
+    // A garbage length can overflow; such a file is certainly not as long as it claims.
+    let expected = payload_len.saturating_add(HEADER_LEN as u64);
+    if file_len < expected {
+        return Err(Corruption::Truncated {
+            expected,
+            found: file_len,
+        }
+        .into());
+    }
+    if file_len > expected {
+        return Err(Corruption::TrailingData {
+            expected,
+            found: file_len,
+        }
+        .into());
+    }
+    Ok(Header { payload_len, hash })
+}
+
+/// `N` bytes of the header starting at `at`; the offsets are the constants of the layout table.
+fn field<const N: usize>(header: &[u8; HEADER_LEN], at: usize) -> [u8; N] {
+    let mut out = [0; N];
+    out.copy_from_slice(&header[at..at + N]);
+    out
+}
+
+/// Reads the whole entry and verifies it. The allocation is sized from the header only after the
+/// header's length has been checked against the real file length, so a corrupt header cannot
+/// make us allocate more than the file holds.
+fn read_entry(file: &mut File, file_len: u64) -> Result<(Vec<u8>, ContentHash), ReadFailure> {
+    let header = read_header(file, file_len)?;
+    let len = usize::try_from(header.payload_len).map_err(|_| Corruption::TooLarge {
+        len: header.payload_len,
+    })?;
+    let mut payload = Vec::new();
+    payload
+        .try_reserve_exact(len)
+        .map_err(|_| Corruption::TooLarge {
+            len: header.payload_len,
+        })?;
+    // `take` bounds the read in case the file grows underneath us; it is then caught below.
+    file.take(header.payload_len)
+        .read_to_end(&mut payload)
+        .map_err(|e| ReadFailure::Io("read", e))?;
+    if payload.len() != len {
+        return Err(Corruption::Truncated {
+            expected: header.payload_len + HEADER_LEN as u64,
+            found: (payload.len() + HEADER_LEN) as u64,
+        }
+        .into());
+    }
+    let actual = ContentHash::of(&payload);
+    if actual != header.hash {
+        return Err(Corruption::HashMismatch.into());
+    }
+    Ok((payload, actual))
+}
+
+/// `Ok(false)` if already gone: another thread or process removing the same file is fine.
+fn remove_file(path: &Path) -> Result<bool, CacheError> {
+    match fs::remove_file(path) {
+        Ok(()) => Ok(true),
+        Err(e) if e.kind() == io::ErrorKind::NotFound => Ok(false),
+        Err(e) => Err(CacheError::io("remove", path, e)),
+    }
+}
+
+/// The entries of `dir`, or none if it does not exist yet. Unreadable individual entries are
+/// skipped rather than failing the whole walk.
+fn read_dir_or_empty(dir: &Path) -> Result<Vec<fs::DirEntry>, CacheError> {
+    match fs::read_dir(dir) {
+        Ok(entries) => Ok(entries.filter_map(Result::ok).collect()),
+        Err(e) if e.kind() == io::ErrorKind::NotFound => Ok(Vec::new()),
+        Err(e) => Err(CacheError::io("list", dir, e)),
+    }
+}
