@@ -27,11 +27,18 @@ pub struct ContentHash(#[serde(with = "hex32")] [u8; 32]);
 impl ContentHash {
     /// Hashes `bytes`, in parallel when they are large.
     pub fn of(bytes: &[u8]) -> ContentHash {
+        ContentHash::of_parts(&[bytes])
+    }
+
+    /// Hashes the concatenation of `parts` without concatenating them.
+    pub fn of_parts(parts: &[&[u8]]) -> ContentHash {
         let mut hasher = blake3::Hasher::new();
-        if bytes.len() >= RAYON_THRESHOLD {
-            hasher.update_rayon(bytes);
-        } else {
-            hasher.update(bytes);
+        for bytes in parts {
+            if bytes.len() >= RAYON_THRESHOLD {
+                hasher.update_rayon(bytes);
+            } else {
+                hasher.update(bytes);
+            }
         }
         ContentHash(*hasher.finalize().as_bytes())
     }

@@ -149,6 +149,11 @@ impl Cache {
         self.store.put(key, payload)
     }
 
+    /// Stores the concatenation of `parts` under `key`, without joining them in memory.
+    pub fn put_parts(&self, key: &Key, parts: &[&[u8]]) -> Result<ContentHash, CacheError> {
+        self.store.put_parts(key, parts)
+    }
+
     /// Whether an entry for `key` exists (not verified).
     pub fn contains(&self, key: &Key) -> Result<bool, CacheError> {
         self.store.contains(key)

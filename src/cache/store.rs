@@ -44,6 +44,8 @@ pub trait Store: Send + Sync {
     /// Stores `payload` under `key`, replacing any entry, and returns the payload's hash.
     /// Concurrent puts of the same key all succeed.
     fn put(&self, key: &Key, payload: &[u8]) -> Result<ContentHash, CacheError>;
+    /// Stores the concatenation of `parts` (large payloads need not be joined in memory).
+    fn put_parts(&self, key: &Key, parts: &[&[u8]]) -> Result<ContentHash, CacheError>;
     /// Whether an entry exists, without verifying it.
     fn contains(&self, key: &Key) -> Result<bool, CacheError>;
     /// Removes the entry; `false` if there was none.
@@ -205,7 +207,12 @@ impl Store for LocalStore {
     }
 
     fn put(&self, key: &Key, payload: &[u8]) -> Result<ContentHash, CacheError> {
-        let hash = ContentHash::of(payload);
+        self.put_parts(key, &[payload])
+    }
+
+    fn put_parts(&self, key: &Key, parts: &[&[u8]]) -> Result<ContentHash, CacheError> {
+        let hash = ContentHash::of_parts(parts);
+        let payload_len: usize = parts.iter().map(|p| p.len()).sum();
         let path = self.entry_path(key);
         if let Some(dir) = path.parent() {
             fs::create_dir_all(dir).map_err(|e| CacheError::io("create directory", dir, e))?;
@@ -213,12 +220,12 @@ impl Store for LocalStore {
         let mut header = [0u8; HEADER_LEN];
         header[0..4].copy_from_slice(&MAGIC);
         header[4..8].copy_from_slice(&FORMAT_VERSION.to_le_bytes());
-        header[8..16].copy_from_slice(&(payload.len() as u64).to_le_bytes());
+        header[8..16].copy_from_slice(&(payload_len as u64).to_le_bytes());
         header[16..48].copy_from_slice(hash.as_bytes());
-        let buffer = WRITE_BUFFER.min(HEADER_LEN + payload.len());
+        let buffer = WRITE_BUFFER.min(HEADER_LEN + payload_len);
         write_atomically(&path, buffer, |w| {
             w.write_all(&header)?;
-            w.write_all(payload)
+            parts.iter().try_for_each(|part| w.write_all(part))
         })?;
         Ok(hash)
     }
