@@ -168,6 +168,7 @@ fn bench(args: &[String]) -> Result<(), String> {
                         .arg(n.to_string())
                         .arg(peer)
                         .env("FIELD", &field)
+                        .env("PEER_VENV", root().join("target/peers-venv"))
                         .env("OUT", &scratch),
                 );
                 match result {
