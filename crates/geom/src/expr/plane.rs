@@ -107,15 +107,64 @@ impl PlaneSampler for SeparableSampler {
             _ => (None, &self.groups[..]),
         };
         let first_scaled = self.groups.len() - scaled.len();
+        let x_of = |g: &Group| g.x.map_or(&[][..], |x| self.x_tables[x].as_slice());
         for (j, row) in out.chunks_exact_mut(nx.max(1)).enumerate() {
-            row.fill(offset.map_or(0.0, |o| o[j]));
-            for (g, group) in scaled.iter().enumerate() {
-                let Some(x) = group.x else { continue };
-                let wv = w[(first_scaled + g) * ny + j];
-                let xt = &self.x_tables[x][..row.len()];
-                for (o, &xv) in row.iter_mut().zip(xt) {
-                    *o += xv * wv;
+            let base = offset.map_or(0.0, |o| o[j]);
+            let weight = |g: usize| w[(first_scaled + g) * ny + j];
+            if scaled.is_empty() {
+                row.fill(base);
+            }
+            // Up to four groups per pass over the row: the row is read and written once per
+            // pass, so fewer passes means fewer loads and stores per multiply-add.
+            for (c, chunk) in scaled.chunks(4).enumerate() {
+                let init = (c == 0).then_some(base);
+                let g0 = 4 * c;
+                match chunk {
+                    [a] => fused(row, init, [x_of(a)], [weight(g0)]),
+                    [a, b] => fused(row, init, [x_of(a), x_of(b)], [weight(g0), weight(g0 + 1)]),
+                    [a, b, d] => fused(
+                        row,
+                        init,
+                        [x_of(a), x_of(b), x_of(d)],
+                        [weight(g0), weight(g0 + 1), weight(g0 + 2)],
+                    ),
+                    [a, b, d, e] => fused(
+                        row,
+                        init,
+                        [x_of(a), x_of(b), x_of(d), x_of(e)],
+                        [weight(g0), weight(g0 + 1), weight(g0 + 2), weight(g0 + 3)],
+                    ),
+                    _ => {}
                 }
+            }
+        }
+    }
+}
+
+/// `row[i] = (init or row[i]) + Σ_g xs[g][i] · ws[g]`, summed left to right. The order is
+/// fixed by the group order alone, so chunking never changes a bit of the result.
+#[inline(always)]
+fn fused<const N: usize>(row: &mut [f64], init: Option<f64>, xs: [&[f64]; N], ws: [f64; N]) {
+    let len = row.len();
+    // Equal lengths let the compiler drop the bounds checks and vectorise the loop.
+    let xs = xs.map(|x| &x[..len]);
+    match init {
+        Some(base) => {
+            for (i, o) in row.iter_mut().enumerate() {
+                let mut acc = base;
+                for g in 0..N {
+                    acc += xs[g][i] * ws[g];
+                }
+                *o = acc;
+            }
+        }
+        None => {
+            for (i, o) in row.iter_mut().enumerate() {
+                let mut acc = *o;
+                for g in 0..N {
+                    acc += xs[g][i] * ws[g];
+                }
+                *o = acc;
             }
         }
     }

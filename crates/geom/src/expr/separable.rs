@@ -155,13 +155,42 @@ impl Analyser {
         Term { c: 1.0, f }
     }
 
+    /// A one-variable subtree as a term, with constant scale factors moved out into the
+    /// coefficient so that `cos(tau*x)` and `2*cos(tau*x)` share one table.
+    fn scaled_factor(&mut self, axis: usize, e: &Expr) -> Term {
+        let mut c = 1.0;
+        let mut e = e;
+        loop {
+            match e {
+                Expr::Neg(a) => {
+                    c = -c;
+                    e = a;
+                }
+                Expr::Binary(BinOp::Mul, k, a) | Expr::Binary(BinOp::Mul, a, k)
+                    if matches!(**k, Expr::Num(_)) =>
+                {
+                    c *= k.const_value().unwrap_or(1.0);
+                    e = a;
+                }
+                Expr::Binary(BinOp::Div, a, k) if matches!(**k, Expr::Num(_)) => {
+                    c /= k.const_value().unwrap_or(1.0);
+                    e = a;
+                }
+                _ => break,
+            }
+        }
+        let mut term = self.factor(axis, e.clone());
+        term.c = c;
+        term
+    }
+
     fn sum(&mut self, e: &Expr) -> Option<Sum> {
         let mask = e.var_mask();
         if mask == 0 {
             return Some(constant(e.const_value()?));
         }
         if mask.count_ones() == 1 {
-            return Some(vec![self.factor(mask.trailing_zeros() as usize, e.clone())]);
+            return Some(vec![self.scaled_factor(mask.trailing_zeros() as usize, e)]);
         }
         let s = match e {
             Expr::Num(_) | Expr::Var(_) => return None, // covered by the mask cases
@@ -245,15 +274,14 @@ impl Analyser {
         let mut out = Vec::with_capacity(a.len());
         for t in a {
             let mut f = t.f;
-            for axis in 0..3 {
-                if let Some(den) = d.f[axis] {
-                    let num = match t.f[axis] {
-                        Some(id) => self.factors[axis][id].clone(),
-                        None => Expr::Num(1.0),
-                    };
-                    let e = Expr::binary(BinOp::Div, num, self.factors[axis][den].clone());
-                    f[axis] = Some(self.intern(axis, e));
-                }
+            for (axis, slot) in f.iter_mut().enumerate() {
+                let Some(den) = d.f[axis] else { continue };
+                let num = match *slot {
+                    Some(id) => self.factors[axis][id].clone(),
+                    None => Expr::Num(1.0),
+                };
+                let e = Expr::binary(BinOp::Div, num, self.factors[axis][den].clone());
+                *slot = Some(self.intern(axis, e));
             }
             out.push(Term { c: t.c / d.c, f });
         }
@@ -347,5 +375,149 @@ impl Analyser {
             .enumerate()
             .filter_map(|(a, p)| p.map(|p| (a, p)));
         Some((k, parts.collect()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::expr::{fold, parse};
+
+    fn form(text: &str) -> Option<SeparableForm> {
+        SeparableForm::analyse(&fold(&parse(text).expect(text)))
+    }
+
+    /// `Σ_t |c_t · X_t · Y_t · Z_t|` at `p`: the scale of the rounding difference between the
+    /// form and the expression.
+    fn magnitude(f: &SeparableForm, p: [f64; 3]) -> f64 {
+        f.terms
+            .iter()
+            .map(|t| {
+                (0..3).fold(t.c.abs(), |acc, a| match t.f[a] {
+                    Some(id) => acc * f.factors[a][id].eval_tree(p).abs(),
+                    None => acc,
+                })
+            })
+            .sum()
+    }
+
+    #[test]
+    fn shapes_of_known_forms() {
+        let g = form("cos(tau*x)*sin(tau*y) + cos(tau*y)*sin(tau*z) + cos(tau*z)*sin(tau*x)")
+            .expect("gyroid separates");
+        assert_eq!(
+            (
+                g.term_count(),
+                g.factor_count(0),
+                g.factor_count(1),
+                g.factor_count(2)
+            ),
+            (3, 2, 2, 2)
+        );
+        assert_eq!(g.coefficient_sum(), 3.0);
+        // cos(a + b) = cos a cos b − sin a sin b.
+        let c = form("cos(tau*(3*x + y))").expect("angle sum separates");
+        assert_eq!(
+            (c.term_count(), c.factor_count(0), c.factor_count(1)),
+            (2, 2, 2)
+        );
+        // cos(x + y + z + 1) expands to 8 products, each scaled by cos 1 or sin 1.
+        assert_eq!(form("cos(x + y + z + 1)").map(|f| f.term_count()), Some(8));
+        assert_eq!(form("sin(x - y)").map(|f| f.term_count()), Some(2));
+        assert_eq!(form("exp(x + 2*y - 1)").map(|f| f.term_count()), Some(1));
+        // (x + y)^3: the products x·y·x and x·x·y are one term.
+        assert_eq!(form("(x + y)^3").map(|f| f.term_count()), Some(4));
+        assert_eq!(form("x*y/(2*z)").map(|f| f.term_count()), Some(1));
+        assert_eq!(form("(x*y)^-2").map(|f| f.term_count()), Some(1));
+        assert_eq!(form("3").map(|f| f.term_count()), Some(1));
+        // A repeated factor is one table.
+        let d = form("cos(tau*x)*sin(tau*y) + cos(tau*x)*cos(tau*z) + 2*cos(tau*x)*sin(tau*y)")
+            .expect("separates");
+        assert_eq!((d.term_count(), d.factor_count(0)), (2, 1));
+        assert_eq!(d.coefficient_sum(), 4.0);
+    }
+
+    #[test]
+    fn mixed_expressions_are_refused() {
+        for text in [
+            "sqrt(x^2 + y^2) - 0.3",
+            "min(x, y)",
+            "max(x, y) + z",
+            "abs(x*y)",
+            "sin(x*y)",
+            "x/(x + y)",
+            "x^y",
+            "tan(x + y)",
+            "log(x*y)",
+            "(x + y)^0.5",
+            "(x + y)^-1",
+            "(x + y + z)^20",
+        ] {
+            assert!(form(text).is_none(), "{text} should not separate");
+        }
+    }
+
+    /// A random expression built only from separable constructs.
+    fn random_separable(rng: &mut u64, depth: u32) -> String {
+        let mut next = |n: u64| {
+            *rng ^= *rng << 13;
+            *rng ^= *rng >> 7;
+            *rng ^= *rng << 17;
+            *rng % n
+        };
+        let leaf = [
+            "x",
+            "y",
+            "z",
+            "0.5",
+            "2",
+            "cos(tau*x)",
+            "sin(3*y)",
+            "exp(z/2)",
+            "x^2",
+        ];
+        if depth == 0 {
+            return leaf[next(leaf.len() as u64) as usize].to_string();
+        }
+        let choice = next(9);
+        let mut sub = || random_separable(rng, depth - 1);
+        match choice {
+            0 => format!("({} + {})", sub(), sub()),
+            1 => format!("({} - {})", sub(), sub()),
+            2 => format!("{} * {}", sub(), sub()),
+            3 => format!("-{}", sub()),
+            4 => format!("cos({} + {})", sub(), sub()),
+            5 => format!("sin({} - 2*{})", sub(), sub()),
+            6 => format!("({})^2", sub()),
+            7 => format!("{} / 3", sub()),
+            _ => format!("exp(({} + {})/4)", sub(), sub()),
+        }
+    }
+
+    #[test]
+    fn random_forms_equal_their_expressions() {
+        let mut rng = 0x9e37_79b9_7f4a_7c15u64;
+        let mut separable = 0;
+        for _ in 0..400 {
+            let text = random_separable(&mut rng, 3);
+            let expr = fold(&parse(&text).expect(&text));
+            let Some(f) = SeparableForm::analyse(&expr) else {
+                continue;
+            };
+            separable += 1;
+            for i in 0..5 {
+                let t = i as f64;
+                let p = [(t * 0.71).sin(), (t * 1.3 + 0.2).cos(), 0.37 * t - 0.8];
+                let want = expr.eval_tree(p);
+                let got = f.eval_tree(p);
+                let tol = 1e-12 * (1.0 + magnitude(&f, p));
+                assert!(
+                    (got - want).abs() <= tol,
+                    "{text} at {p:?}: {got} vs {want}"
+                );
+            }
+        }
+        // Only sin/cos of products of several variables (not angle sums) may refuse.
+        assert!(separable > 250, "only {separable} of 400 separated");
     }
 }
