@@ -5,7 +5,9 @@ mod expr {
     use std::f64::consts::{E, PI, SQRT_2, TAU};
     use std::panic::{AssertUnwindSafe, catch_unwind};
 
-    use latticebuild_geom::expr::{BinOp, Expr, MAX_DEPTH, ParseError, Var, compile, parse};
+    use latticebuild_geom::expr::{
+        BinOp, Expr, MAX_HEIGHT, MAX_NESTING, ParseError, Var, compile, parse,
+    };
 
     const OPERAND_HELP: &str = "expected a number, a variable, a function call or `(`";
 
@@ -300,10 +302,12 @@ mod expr {
             |open: &str, close: &str, n: usize| format!("{}x{}", open.repeat(n), close.repeat(n));
         // Within the limit everything works, including every later pass.
         for text in [
-            deep("(", ")", MAX_DEPTH - 2),
-            deep("-", "", MAX_DEPTH - 2),
-            deep("sin(", ")", MAX_DEPTH - 2),
-            format!("x{}", "+x".repeat(MAX_DEPTH - 2)),
+            deep("(", ")", MAX_NESTING - 2),
+            deep("-", "", MAX_NESTING - 2),
+            deep("sin(", ")", MAX_NESTING - 2),
+            format!("x{}", "+x".repeat(MAX_HEIGHT - 2)),
+            format!("cos(x{})", "-y".repeat(MAX_HEIGHT - 3)),
+            format!("min(x{})", ",y".repeat(MAX_HEIGHT - 2)),
         ] {
             let c = compile(&text).unwrap_or_else(|e| panic!("{}: {e:?}", &text[..20]));
             assert!(c.eval([0.1, 0.2, 0.3]).is_finite());
@@ -321,8 +325,18 @@ mod expr {
             assert_eq!(e.message, "expression is nested too deeply");
             assert!(e.span.end <= text.len());
         }
+        let long_sum = parse(&format!("x{}", "+x".repeat(MAX_HEIGHT))).expect_err("too tall");
+        assert_eq!(
+            long_sum.help.as_deref(),
+            Some("at most 1024 chained operations are supported; group long sums in parentheses")
+        );
+        let parens = parse(&deep("(", ")", MAX_NESTING + 1)).expect_err("too deep");
+        assert_eq!(parens.span, MAX_NESTING..MAX_NESTING + 1);
         // Within the limit, parentheses don't count towards the tree height.
-        assert_eq!(value(&deep("(", ")", MAX_DEPTH / 2), [1.5, 0.0, 0.0]), 1.5);
+        assert_eq!(
+            value(&deep("(", ")", MAX_NESTING / 2), [1.5, 0.0, 0.0]),
+            1.5
+        );
     }
 
     /// A small deterministic generator (xorshift64*), so failures reproduce.

@@ -32,9 +32,9 @@ pub fn compile(text: &str) -> Result<CompiledExpr, ParseError> {
 }
 
 impl CompiledExpr {
-    /// Compiles a tree. Trees from [`parse`] are always accepted; a hand-built tree must not
-    /// be deeper than [`MAX_DEPTH`](super::MAX_DEPTH) levels or the recursive passes may
-    /// exhaust the stack.
+    /// Compiles a tree. Trees from [`parse`] are always accepted; a hand-built tree should not
+    /// be taller than [`MAX_HEIGHT`](super::MAX_HEIGHT), or the recursive passes may exhaust
+    /// the stack.
     pub fn from_expr(expr: &Expr) -> CompiledExpr {
         let expr = fold(expr);
         let program = Program::new(&expr);

@@ -155,7 +155,7 @@ fn number(run: &str, span: Range<usize>) -> Tok {
 /// Splits `2x` / `3pi` into the number and the name written right after it, if that is what
 /// the run looks like.
 fn implicit_product(run: &str) -> Option<(&str, &str)> {
-    let letter = run.find(|c: char| c.is_ascii_alphabetic() || c == '_')?;
+    let letter = run.find(|c: char| c.is_ascii_alphabetic())?;
     // An exponent letter belongs to the number when digits follow it (`2e5x` → `2e5`, `x`).
     let mut split = letter;
     let rest = &run[letter..];
@@ -170,7 +170,7 @@ fn implicit_product(run: &str) -> Option<(&str, &str)> {
         }
     }
     let (num, name) = run.split_at(split);
-    let name_ok = name.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_')
+    let name_ok = name.starts_with(|c: char| c.is_ascii_alphabetic())
         && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
     (num.parse::<f64>().is_ok() && name_ok).then_some((num, name))
 }
@@ -213,5 +213,6 @@ mod tests {
         assert_eq!(implicit_product("3pi"), Some(("3", "pi")));
         assert_eq!(implicit_product("2e"), Some(("2", "e")));
         assert_eq!(implicit_product("1.2.3"), None);
+        assert_eq!(implicit_product("1_000"), None);
     }
 }

@@ -25,11 +25,10 @@ mod plane;
 mod program;
 mod separable;
 
-pub use ast::{BinOp, CONSTANTS, Expr, Func, Var, pow};
+pub use ast::{BinOp, CONSTANTS, Expr, Func, Var};
 pub use compiled::{CompiledExpr, compile};
 pub use fold::fold;
-pub use parse::{MAX_DEPTH, parse};
-pub use program::BLOCK;
+pub use parse::{MAX_HEIGHT, MAX_NESTING, parse};
 pub use separable::{MAX_TERMS, SeparableForm};
 
 /// A syntax or name error in an expression, located by a byte span in its text.

@@ -12,8 +12,9 @@
 //! (`2^-1`).
 //!
 //! Invariants:
-//! - `parse` never panics and never overflows the stack: recursion depth and tree height are
-//!   both capped at [`MAX_DEPTH`], which also bounds every later recursive pass over the tree.
+//! - `parse` never panics and never overflows the stack: its recursion is capped at
+//!   [`MAX_NESTING`] and the tree height at [`MAX_HEIGHT`], which also bounds every later
+//!   recursive pass over the tree.
 //! - Errors point at the leftmost problem; spans are byte ranges on char boundaries.
 //! - Messages are lower case with names in backticks; `help` says how to fix it when we can.
 
@@ -24,10 +25,14 @@ use super::ast::{BinOp, CONSTANTS, Expr, Func, Var};
 use super::lex::{Tok, Token, tokenize};
 use crate::spelling::closest;
 
-/// Deepest nesting (of parentheses, unary signs, powers and calls) and tallest tree accepted.
-/// Generous for hand-written formulas, and small enough that the recursive passes over the
-/// tree fit comfortably in a 2 MiB thread stack.
-pub const MAX_DEPTH: usize = 256;
+/// Deepest nesting of parentheses, unary signs, powers and calls accepted. The parser
+/// recurses through several frames per level, so this is kept well below [`MAX_HEIGHT`].
+pub const MAX_NESTING: usize = 256;
+
+/// Tallest tree accepted. Long sums are left-deep chains, so this is also the longest sum
+/// without parentheses. Generous for hand-written formulas, and small enough that the
+/// recursive passes over the tree fit comfortably in a 2 MiB thread stack.
+pub const MAX_HEIGHT: usize = 1024;
 
 const OPERAND_HELP: &str = "expected a number, a variable, a function call or `(`";
 const VARIABLE_NAMES: [&str; 6] = ["x", "y", "z", "pi", "tau", "e"];
@@ -99,7 +104,7 @@ impl Parser<'_> {
 
     fn enter(&mut self, span: &Range<usize>) -> Result<(), ParseError> {
         self.depth += 1;
-        if self.depth > MAX_DEPTH {
+        if self.depth > MAX_NESTING {
             return Err(too_deep(span.clone()));
         }
         Ok(())
@@ -170,8 +175,8 @@ impl Parser<'_> {
         if !negate {
             return Ok((operand, height));
         }
-        if height + 1 > MAX_DEPTH {
-            return Err(too_deep(span));
+        if height + 1 > MAX_HEIGHT {
+            return Err(too_tall(span));
         }
         Ok((Expr::Neg(Box::new(operand)), height + 1))
     }
@@ -301,8 +306,8 @@ impl Parser<'_> {
                 let mut args = args.into_iter();
                 match (args.next(), args.next()) {
                     (Some((arg, height)), None) => {
-                        if height + 1 > MAX_DEPTH {
-                            return Err(too_deep(call_span));
+                        if height + 1 > MAX_HEIGHT {
+                            return Err(too_tall(call_span));
                         }
                         Ok((Expr::call(f, arg), height + 1))
                     }
@@ -334,8 +339,8 @@ impl Parser<'_> {
 
 fn join(op: BinOp, (a, ha): Node, (b, hb): Node, span: Range<usize>) -> Result<Node, ParseError> {
     let height = ha.max(hb) + 1;
-    if height > MAX_DEPTH {
-        return Err(too_deep(span));
+    if height > MAX_HEIGHT {
+        return Err(too_tall(span));
     }
     Ok((Expr::binary(op, a, b), height))
 }
@@ -344,7 +349,19 @@ fn too_deep(span: Range<usize>) -> ParseError {
     error(
         span,
         "expression is nested too deeply".into(),
-        Some(format!("at most {MAX_DEPTH} levels are supported")),
+        Some(format!(
+            "at most {MAX_NESTING} levels of parentheses, signs, powers and calls are supported"
+        )),
+    )
+}
+
+fn too_tall(span: Range<usize>) -> ParseError {
+    error(
+        span,
+        "expression is nested too deeply".into(),
+        Some(format!(
+            "at most {MAX_HEIGHT} chained operations are supported; group long sums in parentheses"
+        )),
     )
 }
 

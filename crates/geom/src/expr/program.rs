@@ -175,19 +175,25 @@ impl Program {
             xs.len() == len && ys.len() == len && zs.len() == len,
             "eval_points needs equally long slices"
         );
-        let mut regs = vec![[0.0f64; BLOCK]; self.registers];
+        // Registers are `stride` long: a single point (or a short row) needs no full block.
+        let stride = len.clamp(1, BLOCK);
+        let mut regs = Registers {
+            data: vec![0.0; self.registers * stride],
+            stride,
+        };
         let mut start = 0;
         while start < len {
             let n = (len - start).min(BLOCK);
             for (axis, src) in [xs, ys, zs].into_iter().enumerate() {
                 if self.inputs & (1 << axis) != 0 {
-                    regs[axis][..n].copy_from_slice(&src[start..start + n]);
+                    regs.get_mut(axis, n)
+                        .copy_from_slice(&src[start..start + n]);
                 }
             }
             for ins in &self.code {
                 exec(ins, &mut regs, n);
             }
-            out[start..start + n].copy_from_slice(&regs[self.result][..n]);
+            out[start..start + n].copy_from_slice(regs.get_mut(self.result, n));
             start += n;
         }
     }
@@ -199,10 +205,10 @@ impl Program {
     }
 }
 
-fn exec(ins: &Instr, regs: &mut [[f64; BLOCK]], n: usize) {
+fn exec(ins: &Instr, regs: &mut Registers, n: usize) {
     let d = ins.dst;
     match ins.op {
-        Op::Const(k) => regs[d][..n].fill(k),
+        Op::Const(k) => regs.get_mut(d, n).fill(k),
         Op::Neg(a) => map1(regs, d, a, n, |v| -v),
         Op::Square(a) => map1(regs, d, a, n, |v| v * v),
         Op::Call(f, a) => match f {
@@ -244,25 +250,46 @@ fn exec(ins: &Instr, regs: &mut [[f64; BLOCK]], n: usize) {
     }
 }
 
+/// Block-sized register arrays in one allocation.
+struct Registers {
+    data: Vec<f64>,
+    stride: usize,
+}
+
+impl Registers {
+    fn range(&self, r: Reg, n: usize) -> std::ops::Range<usize> {
+        r * self.stride..r * self.stride + n
+    }
+
+    fn get_mut(&mut self, r: Reg, n: usize) -> &mut [f64] {
+        let range = self.range(r, n);
+        &mut self.data[range]
+    }
+}
+
 #[inline(always)]
-fn map1(regs: &mut [[f64; BLOCK]], d: Reg, a: Reg, n: usize, f: impl Fn(f64) -> f64) {
+fn map1(regs: &mut Registers, d: Reg, a: Reg, n: usize, f: impl Fn(f64) -> f64) {
+    let (rd, ra) = (regs.range(d, n), regs.range(a, n));
     let [dst, a] = regs
-        .get_disjoint_mut([d, a])
+        .data
+        .get_disjoint_mut([rd, ra])
         .expect("destination is never an operand");
-    for (o, &u) in dst[..n].iter_mut().zip(&a[..n]) {
+    for (o, &u) in dst.iter_mut().zip(a.iter()) {
         *o = f(u);
     }
 }
 
 #[inline(always)]
-fn map2(regs: &mut [[f64; BLOCK]], d: Reg, a: Reg, b: Reg, n: usize, f: impl Fn(f64, f64) -> f64) {
+fn map2(regs: &mut Registers, d: Reg, a: Reg, b: Reg, n: usize, f: impl Fn(f64, f64) -> f64) {
     if a == b {
         return map1(regs, d, a, n, |u| f(u, u));
     }
+    let ranges = [regs.range(d, n), regs.range(a, n), regs.range(b, n)];
     let [dst, a, b] = regs
-        .get_disjoint_mut([d, a, b])
+        .data
+        .get_disjoint_mut(ranges)
         .expect("destination is never an operand");
-    for ((o, &u), &v) in dst[..n].iter_mut().zip(&a[..n]).zip(&b[..n]) {
+    for ((o, &u), &v) in dst.iter_mut().zip(a.iter()).zip(b.iter()) {
         *o = f(u, v);
     }
 }
