@@ -153,7 +153,6 @@ impl Parser<'_> {
             let op = match self.peek().tok {
                 Tok::Star => BinOp::Mul,
                 Tok::Slash => BinOp::Div,
-                Tok::StarStar => return Err(self.unexpected(self.peek().clone(), "")),
                 _ => return Ok(lhs),
             };
             let span = self.next().span;
