@@ -12,11 +12,8 @@ use latticebuild_geom::expr::ParseError;
 use super::source::Sources;
 use crate::diagnostics::Diagnostic;
 
-/// Checks an expression's syntax.
-///
-/// MERGE: this is the single call site to switch to `latticebuild_geom::expr::parse` once it
-/// lands (`latticebuild_geom::expr::parse(text).map(|_| ())`). Until then only emptiness is
-/// checked, so that manifests with any non-empty formula validate.
+/// Checks an expression's syntax and names with the geometry crate's parser (an empty formula
+/// gets its own, friendlier message).
 pub(crate) fn check_expression(text: &str) -> Result<(), ParseError> {
     if text.trim().is_empty() {
         return Err(ParseError {
@@ -25,7 +22,7 @@ pub(crate) fn check_expression(text: &str) -> Result<(), ParseError> {
             help: Some("write a formula in x, y and z, e.g. `cos(x) + cos(y) + cos(z)`".into()),
         });
     }
-    Ok(())
+    latticebuild_geom::expr::parse(text).map(|_| ())
 }
 
 /// The diagnostic for an expression error in the string value at `value_span` (`key` names it,

@@ -1188,7 +1188,7 @@ fn empty_expressions_are_rejected() {
 }
 
 #[test]
-#[ignore = "needs expr::parse"]
+
 fn expression_syntax_errors_point_inside_the_string() {
     let text = "[cells.a]\nexpr = \"sin(x\"\n";
     let diags = parse(text, Path::new("lattice.toml"), &[]).expect_err("`sin(x` is unbalanced");

@@ -12,6 +12,8 @@
 //! - The tables are sampled at exactly [`Grid::coord`], the coordinates the pointwise sampler
 //!   uses, so the two differ only by the rounding of the expanded form.
 
+use std::ops::Range;
+
 use super::program::Program;
 use super::separable::SeparableForm;
 use crate::field::{Grid, PlaneSampler};
@@ -79,11 +81,12 @@ impl PlaneSampler for SeparableSampler {
         &self.grid
     }
 
-    fn sample_plane(&self, k: usize, out: &mut [f64]) {
-        let [nx, ny, _] = self.grid.counts;
-        assert_eq!(out.len(), nx * ny, "plane buffer must hold nx * ny samples");
+    fn sample_rows(&self, k: usize, rows: Range<usize>, out: &mut [f64]) {
+        let nx = self.grid.counts[0];
+        let ny = rows.len();
+        assert_eq!(out.len(), nx * ny, "row buffer must hold nx * rows samples");
 
-        // W_a[j] for every group a, rows of length ny.
+        // W_a[j] for every group a, over the requested rows.
         let mut w = vec![0.0; self.groups.len() * ny];
         for (group, wg) in self.groups.iter().zip(w.chunks_exact_mut(ny.max(1))) {
             for &(c, y, z) in &group.terms {
@@ -93,7 +96,7 @@ impl PlaneSampler for SeparableSampler {
                 };
                 match y {
                     Some(y) => {
-                        for (w, &yv) in wg.iter_mut().zip(&self.y_tables[y]) {
+                        for (w, &yv) in wg.iter_mut().zip(&self.y_tables[y][rows.clone()]) {
                             *w += cz * yv;
                         }
                     }
