@@ -16,7 +16,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::cache::{Cache, CacheError, ContentHash, Key, KeyDescription, Lookup, explain};
+use crate::cache::{Cache, CacheError, ContentHash, Key, Lookup, explain};
 use crate::graph::{Graph, NodeId};
 use crate::stages::{MeshArtifact, OutputSink, Stage, WrittenOutput};
 
@@ -76,7 +76,6 @@ enum Value {
 
 struct Resolved {
     key: Key,
-    desc: KeyDescription,
     hash: ContentHash,
     value: Option<Value>,
 }
@@ -107,7 +106,7 @@ impl<'a> Builder<'a> {
             let nodes: Vec<NodeId> = needed.iter().copied().filter(|&id| level[id] == d).collect();
             self.run_level(&nodes)?;
         }
-        self.collect_garbage(&needed, targets.is_empty())?;
+        self.collect_garbage(&needed)?;
         let mut results = Vec::new();
         for (name, &write) in &self.graph.outputs {
             let Some(Value::Written(written)) = self.resolved.get(&write).and_then(|r| r.value.clone()) else {
@@ -141,7 +140,7 @@ impl<'a> Builder<'a> {
             match self.lookup(id, &key)? {
                 Ok((hash, value)) => {
                     self.cache.record(&node.name, &key, &desc, &hash)?;
-                    self.resolved.insert(id, Resolved { key, desc, hash, value });
+                    self.resolved.insert(id, Resolved { key, hash, value });
                     self.runs.insert(id, NodeRun {
                         node: node.name.clone(),
                         stage: node.stage.kind(),
@@ -180,7 +179,7 @@ impl<'a> Builder<'a> {
                 };
             }
             self.cache.record(&node.name, &key, &desc, &hash)?;
-            self.resolved.insert(id, Resolved { key, desc, hash, value: Some(value) });
+            self.resolved.insert(id, Resolved { key, hash, value: Some(value) });
             self.runs.insert(id, NodeRun { node: node.name.clone(), stage: node.stage.kind(), cached: false, seconds, why });
         }
         Ok(())
@@ -271,7 +270,7 @@ impl<'a> Builder<'a> {
 
     /// Drops cache objects no node of this manifest refers to any more, so an optimization
     /// loop over thousands of parameter values does not fill the disk.
-    fn collect_garbage(&self, needed: &[NodeId], all: bool) -> Result<(), BuildError> {
+    fn collect_garbage(&self, needed: &[NodeId]) -> Result<(), BuildError> {
         let mut keep: HashSet<Key> = needed.iter().map(|id| self.resolved[id].key).collect();
         for (id, node) in self.graph.nodes.iter().enumerate() {
             if !self.resolved.contains_key(&id) {
@@ -280,7 +279,6 @@ impl<'a> Builder<'a> {
                 }
             }
         }
-        let _ = all;
         self.cache.gc(&keep)?;
         Ok(())
     }

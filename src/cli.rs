@@ -1,7 +1,7 @@
 //! The command line: argument parsing, the commands, and exit codes (0 ok, 1 build failure,
 //! 2 usage or manifest error). With the cache, the only module that touches the filesystem.
 
-use std::io::{IsTerminal, Write};
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 

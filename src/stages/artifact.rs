@@ -113,8 +113,9 @@ pub struct WrittenFile {
     pub path: String,
     pub format: String,
     pub bytes: u64,
-    /// blake3 of the file's content, hex.
-    pub blake3: String,
+    /// Modification time when written (ns since the epoch): with the size, how a later build
+    /// tells that the file is still the one it wrote.
+    pub modified_ns: u64,
 }
 
 /// The write stage's payload: the files and the summary of the mesh they hold.

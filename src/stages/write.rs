@@ -16,14 +16,14 @@ pub const VERSION: u32 = 1;
 /// name and renames it into place, so a file is whole or absent.
 pub trait OutputSink: Sync {
     /// Creates `relative` (to the output directory) from what `fill` writes, and returns its
-    /// size and blake3 (hex).
+    /// size and modification time (ns since the epoch).
     fn write_file(
         &self,
         relative: &str,
         fill: &mut dyn FnMut(&mut dyn Write) -> io::Result<()>,
-    ) -> io::Result<(u64, String)>;
+    ) -> io::Result<(u64, u64)>;
 
-    /// Whether `file` is on disk with exactly the recorded content.
+    /// Whether `file` is still on disk as it was written (same size and modification time).
     fn holds(&self, file: &WrittenFile) -> bool;
 }
 
@@ -58,10 +58,10 @@ impl WriteStage {
             .par_iter()
             .map(|&format| {
                 let path = self.path(format);
-                let (bytes, blake3) = sink
+                let (bytes, modified_ns) = sink
                     .write_file(&path, &mut |w| mesh_io::write_mesh(&artifact.mesh, format, self.encoding, w))
                     .map_err(|e| format!("cannot write `{path}`: {e}"))?;
-                Ok(WrittenFile { path, format: format.name().to_string(), bytes, blake3 })
+                Ok(WrittenFile { path, format: format.name().to_string(), bytes, modified_ns })
             })
             .collect::<Result<Vec<_>, String>>()?;
         Ok(WrittenOutput { files, summary: artifact.summary.clone() })
