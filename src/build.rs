@@ -38,6 +38,9 @@ impl Progress for NoProgress {
     fn finish(&self, _: &str) {}
 }
 
+/// Hands a mesh payload to a background cache write.
+type StoreMesh<'s> = dyn FnMut(Key, Arc<MeshArtifact>, ContentHash) + 's;
+
 /// How one node went.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NodeRun {
@@ -90,8 +93,20 @@ pub struct Builder<'a> {
 }
 
 impl<'a> Builder<'a> {
-    pub fn new(graph: &'a Graph, cache: &'a Cache, sink: &'a dyn OutputSink, progress: &'a dyn Progress) -> Self {
-        Builder { graph, cache, sink, progress, resolved: HashMap::new(), runs: HashMap::new() }
+    pub fn new(
+        graph: &'a Graph,
+        cache: &'a Cache,
+        sink: &'a dyn OutputSink,
+        progress: &'a dyn Progress,
+    ) -> Self {
+        Builder {
+            graph,
+            cache,
+            sink,
+            progress,
+            resolved: HashMap::new(),
+            runs: HashMap::new(),
+        }
     }
 
     /// Builds `targets` (all outputs when empty); the caller has checked the names.
@@ -99,17 +114,55 @@ impl<'a> Builder<'a> {
         let needed = self.graph.needed(targets).unwrap_or_default();
         let mut level = vec![0usize; self.graph.nodes.len()];
         for &id in &needed {
-            level[id] = self.graph.nodes[id].inputs.iter().map(|&i| level[i] + 1).max().unwrap_or(0);
+            level[id] = self.graph.nodes[id]
+                .inputs
+                .iter()
+                .map(|&i| level[i] + 1)
+                .max()
+                .unwrap_or(0);
         }
-        let depth = needed.iter().map(|&id| level[id]).max().map_or(0, |d| d + 1);
-        for d in 0..depth {
-            let nodes: Vec<NodeId> = needed.iter().copied().filter(|&id| level[id] == d).collect();
-            self.run_level(&nodes)?;
-        }
+        let depth = needed
+            .iter()
+            .map(|&id| level[id])
+            .max()
+            .map_or(0, |d| d + 1);
+        // Large payloads are written to the cache on background threads (their hash is known
+        // first), overlapping the 300 MB cache write of a mesh with writing its files.
+        let cache = self.cache;
+        std::thread::scope(|scope| -> Result<(), BuildError> {
+            let mut stores = Vec::new();
+            let mut outcome = Ok(());
+            for d in 0..depth {
+                let nodes: Vec<NodeId> = needed
+                    .iter()
+                    .copied()
+                    .filter(|&id| level[id] == d)
+                    .collect();
+                outcome = self.run_level(&nodes, &mut |key: Key, mesh: Arc<MeshArtifact>, hash| {
+                    stores.push(scope.spawn(move || {
+                        let head = mesh.head();
+                        let [vertices, triangles] = mesh.arrays();
+                        cache.put_parts(&key, &[&head, vertices, triangles], hash)
+                    }));
+                });
+                if outcome.is_err() {
+                    break;
+                }
+            }
+            for store in stores {
+                store.join().map_err(|_| BuildError::Stage {
+                    node: "cache".into(),
+                    message: "a cache write panicked".into(),
+                })??;
+            }
+            outcome
+        })?;
         self.collect_garbage(&needed)?;
         let mut results = Vec::new();
         for (name, &write) in &self.graph.outputs {
-            let Some(Value::Written(written)) = self.resolved.get(&write).and_then(|r| r.value.clone()) else {
+            let Some(Value::Written(written)) =
+                self.resolved.get(&write).and_then(|r| r.value.clone())
+            else {
                 continue;
             };
             let mut chain = Vec::new();
@@ -120,19 +173,32 @@ impl<'a> Builder<'a> {
             }
             chain.sort_unstable();
             chain.dedup();
-            let stages = chain.iter().filter_map(|id| self.runs.get(id).cloned()).collect();
-            results.push(OutputResult { name: name.clone(), written: (*written).clone(), stages });
+            let stages = chain
+                .iter()
+                .filter_map(|id| self.runs.get(id).cloned())
+                .collect();
+            results.push(OutputResult {
+                name: name.clone(),
+                written: (*written).clone(),
+                stages,
+            });
         }
         Ok(results)
     }
 
-    /// Resolves one level: cache lookups first, then the misses in parallel.
-    fn run_level(&mut self, nodes: &[NodeId]) -> Result<(), BuildError> {
+    /// Resolves one level: cache lookups first, then the misses in parallel. Meshes are handed
+    /// to `store_mesh` with their hash, to be written to the cache in the background.
+    fn run_level(
+        &mut self,
+        nodes: &[NodeId],
+        store_mesh: &mut StoreMesh,
+    ) -> Result<(), BuildError> {
         let mut to_run = Vec::new();
         for &id in nodes {
             let started = Instant::now();
             let node = &self.graph.nodes[id];
-            let inputs: Vec<ContentHash> = node.inputs.iter().map(|i| self.resolved[i].hash).collect();
+            let inputs: Vec<ContentHash> =
+                node.inputs.iter().map(|i| self.resolved[i].hash).collect();
             let (key, desc) = node.stage.key(&inputs).map_err(|e| BuildError::Stage {
                 node: node.name.clone(),
                 message: format!("cannot form its cache key: {e}"),
@@ -141,20 +207,23 @@ impl<'a> Builder<'a> {
                 Ok((hash, value)) => {
                     self.cache.record(&node.name, &key, &desc, &hash)?;
                     self.resolved.insert(id, Resolved { key, hash, value });
-                    self.runs.insert(id, NodeRun {
-                        node: node.name.clone(),
-                        stage: node.stage.kind(),
-                        cached: true,
-                        seconds: started.elapsed().as_secs_f64(),
-                        why: vec![],
-                    });
+                    self.runs.insert(
+                        id,
+                        NodeRun {
+                            node: node.name.clone(),
+                            stage: node.stage.kind(),
+                            cached: true,
+                            seconds: started.elapsed().as_secs_f64(),
+                            why: vec![],
+                        },
+                    );
                 }
                 Err(reason) => to_run.push((id, key, desc, reason)),
             }
         }
         for (id, ..) in &to_run {
             for input in self.graph.nodes[*id].inputs.clone() {
-                self.load(input)?;
+                self.load(input, store_mesh)?;
             }
         }
         let this = &*self;
@@ -163,13 +232,23 @@ impl<'a> Builder<'a> {
             .map(|(id, key, desc, reason)| {
                 let started = Instant::now();
                 let result = this.execute(id);
-                (id, key, desc, reason, result, started.elapsed().as_secs_f64())
+                (
+                    id,
+                    key,
+                    desc,
+                    reason,
+                    result,
+                    started.elapsed().as_secs_f64(),
+                )
             })
             .collect();
         for (id, key, desc, reason, result, seconds) in outcomes {
             let node = &self.graph.nodes[id];
-            let value = result.map_err(|message| BuildError::Stage { node: node.name.clone(), message })?;
-            let hash = self.store(&key, &value)?;
+            let value = result.map_err(|message| BuildError::Stage {
+                node: node.name.clone(),
+                message,
+            })?;
+            let hash = self.store(&key, &value, store_mesh)?;
             let mut why = reason.map_or_else(Vec::new, |r| vec![r]);
             if why.is_empty() {
                 why = match self.cache.previous(&node.name) {
@@ -179,15 +258,35 @@ impl<'a> Builder<'a> {
                 };
             }
             self.cache.record(&node.name, &key, &desc, &hash)?;
-            self.resolved.insert(id, Resolved { key, hash, value: Some(value) });
-            self.runs.insert(id, NodeRun { node: node.name.clone(), stage: node.stage.kind(), cached: false, seconds, why });
+            self.resolved.insert(
+                id,
+                Resolved {
+                    key,
+                    hash,
+                    value: Some(value),
+                },
+            );
+            self.runs.insert(
+                id,
+                NodeRun {
+                    node: node.name.clone(),
+                    stage: node.stage.kind(),
+                    cached: false,
+                    seconds,
+                    why,
+                },
+            );
         }
         Ok(())
     }
 
     /// A cache hit as `Ok((hash, value if already loaded))`, or why the node must run.
     #[allow(clippy::type_complexity)]
-    fn lookup(&self, id: NodeId, key: &Key) -> Result<Result<(ContentHash, Option<Value>), Option<String>>, BuildError> {
+    fn lookup(
+        &self,
+        id: NodeId,
+        key: &Key,
+    ) -> Result<Result<(ContentHash, Option<Value>), Option<String>>, BuildError> {
         let node = &self.graph.nodes[id];
         let Some(hash) = self.cache.peek_hash(key) else {
             return Ok(Err(None));
@@ -197,20 +296,24 @@ impl<'a> Builder<'a> {
         }
         // A write is only up to date if its files are still there, unchanged.
         match self.cache.get(key)? {
-            Lookup::Hit { payload, hash } => match serde_json::from_slice::<WrittenOutput>(&payload) {
-                Ok(written) => match written.files.iter().find(|f| !self.sink.holds(f)) {
-                    None => Ok(Ok((hash, Some(Value::Written(Arc::new(written)))))),
-                    Some(f) => Ok(Err(Some(format!("`{}` is missing or was changed", f.path)))),
-                },
-                Err(e) => Ok(Err(Some(format!("its cache entry is unreadable: {e}")))),
-            },
-            Lookup::Corrupt { reason } => Ok(Err(Some(format!("its cache entry was corrupt ({reason})")))),
+            Lookup::Hit { payload, hash } => {
+                match serde_json::from_slice::<WrittenOutput>(&payload) {
+                    Ok(written) => match written.files.iter().find(|f| !self.sink.holds(f)) {
+                        None => Ok(Ok((hash, Some(Value::Written(Arc::new(written)))))),
+                        Some(f) => Ok(Err(Some(format!("`{}` is missing or was changed", f.path)))),
+                    },
+                    Err(e) => Ok(Err(Some(format!("its cache entry is unreadable: {e}")))),
+                }
+            }
+            Lookup::Corrupt { reason } => {
+                Ok(Err(Some(format!("its cache entry was corrupt ({reason})"))))
+            }
             Lookup::Miss => Ok(Err(None)),
         }
     }
 
     /// Makes sure node `id`'s value is in memory, from the cache or by running it again.
-    fn load(&mut self, id: NodeId) -> Result<(), BuildError> {
+    fn load(&mut self, id: NodeId, store_mesh: &mut StoreMesh) -> Result<(), BuildError> {
         if self.resolved[&id].value.is_some() {
             return Ok(());
         }
@@ -224,11 +327,14 @@ impl<'a> Builder<'a> {
         // The entry went bad between lookup and load: run the node again (deterministic, so
         // its hash and everything keyed on it stay the same).
         for input in self.graph.nodes[id].inputs.clone() {
-            self.load(input)?;
+            self.load(input, store_mesh)?;
         }
         let node = &self.graph.nodes[id];
-        let value = self.execute(id).map_err(|message| BuildError::Stage { node: node.name.clone(), message })?;
-        self.store(&key, &value)?;
+        let value = self.execute(id).map_err(|message| BuildError::Stage {
+            node: node.name.clone(),
+            message,
+        })?;
+        self.store(&key, &value, store_mesh)?;
         self.resolved.get_mut(&id).expect("resolved").value = Some(value);
         Ok(())
     }
@@ -236,30 +342,46 @@ impl<'a> Builder<'a> {
     /// Runs node `id`'s stage on its inputs' values, which must be loaded.
     fn execute(&self, id: NodeId) -> Result<Value, String> {
         let node = &self.graph.nodes[id];
-        let input = |k: usize| self.resolved[&node.inputs[k]].value.clone().expect("inputs are loaded");
+        let input = |k: usize| {
+            self.resolved[&node.inputs[k]]
+                .value
+                .clone()
+                .expect("inputs are loaded")
+        };
         match &node.stage {
             Stage::Cell(stage) => Ok(Value::Bytes(Arc::new(stage.run()?))),
             Stage::Contour(stage) => {
-                let Value::Bytes(cell) = input(0) else { return Err("input is not a cell".into()) };
+                let Value::Bytes(cell) = input(0) else {
+                    return Err("input is not a cell".into());
+                };
                 let advance = self.progress.start(&node.name, stage.steps());
                 let result = stage.run(&cell, &*advance);
                 self.progress.finish(&node.name);
                 Ok(Value::Mesh(Arc::new(result?)))
             }
             Stage::Write(stage) => {
-                let Value::Mesh(mesh) = input(0) else { return Err("input is not a mesh".into()) };
+                let Value::Mesh(mesh) = input(0) else {
+                    return Err("input is not a mesh".into());
+                };
                 Ok(Value::Written(Arc::new(stage.run(&mesh, self.sink)?)))
             }
         }
     }
 
-    fn store(&self, key: &Key, value: &Value) -> Result<ContentHash, BuildError> {
+    fn store(
+        &self,
+        key: &Key,
+        value: &Value,
+        store_mesh: &mut StoreMesh,
+    ) -> Result<ContentHash, BuildError> {
         Ok(match value {
             Value::Bytes(bytes) => self.cache.put(key, bytes)?,
             Value::Mesh(mesh) => {
                 let head = mesh.head();
                 let [vertices, triangles] = mesh.arrays();
-                self.cache.put_parts(key, &[&head, vertices, triangles])?
+                let hash = ContentHash::of_parts(&[&head, vertices, triangles]);
+                store_mesh(*key, Arc::clone(mesh), hash);
+                hash
             }
             Value::Written(written) => {
                 let json = serde_json::to_vec(&**written).expect("written output serializes");

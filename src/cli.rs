@@ -126,7 +126,9 @@ pub fn main() -> ExitCode {
 fn set_jobs(jobs: Option<usize>) -> Result<(), Failure> {
     let Some(jobs) = jobs else { return Ok(()) };
     if jobs == 0 {
-        return Err(Failure::Usage("error: `--jobs` must be at least 1\n".into()));
+        return Err(Failure::Usage(
+            "error: `--jobs` must be at least 1\n".into(),
+        ));
     }
     rayon::ThreadPoolBuilder::new()
         .num_threads(jobs)
@@ -142,7 +144,10 @@ pub fn load_manifest(args: &ManifestArgs) -> Result<Manifest, Failure> {
 fn open_cache(path: &Path, quiet: bool) -> Result<Cache, Failure> {
     Cache::open_with(path, || {
         if !quiet {
-            eprintln!("waiting for another build of `{}` to finish…", path.display());
+            eprintln!(
+                "waiting for another build of `{}` to finish…",
+                path.display()
+            );
         }
     })
     .map_err(|e| Failure::Build(e.to_string()))
@@ -160,7 +165,10 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
         let names: Vec<&str> = graph.outputs.keys().map(String::as_str).collect();
         let mut text = String::new();
         for name in unknown {
-            text.push_str(&format!("error: no output named `{name}` in `{}`\n", args.manifest.manifest.display()));
+            text.push_str(&format!(
+                "error: no output named `{name}` in `{}`\n",
+                args.manifest.manifest.display()
+            ));
             match latticebuild_geom::spelling::closest(&name, names.iter().copied()) {
                 Some(s) => text.push_str(&format!("  = help: did you mean `{s}`?\n")),
                 None => text.push_str(&format!("  = help: outputs are: {}\n", names.join(", "))),
@@ -169,7 +177,9 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
         return Err(Failure::Usage(text));
     }
     let cache = open_cache(&manifest.path, args.quiet)?;
-    let sink = OutputDir { dir: manifest.out_dir.clone() };
+    let sink = OutputDir {
+        dir: manifest.out_dir.clone(),
+    };
     let bars;
     let progress: &dyn Progress = if !args.quiet && std::io::stderr().is_terminal() {
         bars = Bars::new();
@@ -187,12 +197,19 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
                 if run.cached {
                     eprintln!("  {}: cached", run.node);
                 } else {
-                    eprintln!("  {}: ran in {:.2} s because {}", run.node, run.seconds, run.why.join("; "));
+                    eprintln!(
+                        "  {}: ran in {:.2} s because {}",
+                        run.node,
+                        run.seconds,
+                        run.why.join("; ")
+                    );
                 }
             }
         }
         let report = Report::new(&manifest, result);
-        let path = manifest.out_dir.join(format!("{}.report.json", result.name));
+        let path = manifest
+            .out_dir
+            .join(format!("{}.report.json", result.name));
         let json = serde_json::to_string_pretty(&report).expect("report serializes");
         write_atomically(&path, &mut |w| w.write_all(json.as_bytes()))
             .map_err(|e| Failure::Build(format!("cannot write `{}`: {e}", path.display())))?;
@@ -220,7 +237,9 @@ fn run_graph(args: &ManifestArgs) -> Result<(), Failure> {
     let manifest = load_manifest(args)?;
     let graph = compile(&manifest)?;
     let cache = open_cache(&manifest.path, false)?;
-    let sink = OutputDir { dir: manifest.out_dir.clone() };
+    let sink = OutputDir {
+        dir: manifest.out_dir.clone(),
+    };
     for line in crate::graph::status::lines(&graph, &cache, &sink) {
         println!("{line}");
     }

@@ -54,9 +54,15 @@ pub fn write_atomically(
     fill: &mut dyn FnMut(&mut dyn Write) -> io::Result<()>,
 ) -> io::Result<u64> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
     fs::create_dir_all(dir)?;
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let temp = dir.join(format!(
         ".{name}.tmp-{}-{}",
         std::process::id(),
@@ -64,7 +70,10 @@ pub fn write_atomically(
     ));
     let result = (|| {
         let file = File::create(&temp)?;
-        let mut writer = CountingWriter { inner: BufWriter::with_capacity(1 << 20, file), bytes: 0 };
+        let mut writer = CountingWriter {
+            inner: BufWriter::with_capacity(1 << 20, file),
+            bytes: 0,
+        };
         fill(&mut writer)?;
         writer.flush()?;
         let bytes = writer.bytes;

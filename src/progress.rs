@@ -17,7 +17,10 @@ pub struct Bars {
 
 impl Bars {
     pub fn new() -> Bars {
-        Bars { multi: MultiProgress::with_draw_target(ProgressDrawTarget::stderr()), bars: Mutex::new(Vec::new()) }
+        Bars {
+            multi: MultiProgress::with_draw_target(ProgressDrawTarget::stderr()),
+            bars: Mutex::new(Vec::new()),
+        }
     }
 }
 
@@ -43,7 +46,8 @@ impl Progress for Bars {
         let shown = std::sync::atomic::AtomicBool::new(false);
         Box::new(move |n| {
             bar.inc(n as u64);
-            if started.elapsed() > DELAY && !shown.swap(true, std::sync::atomic::Ordering::Relaxed) {
+            if started.elapsed() > DELAY && !shown.swap(true, std::sync::atomic::Ordering::Relaxed)
+            {
                 let visible = self.multi.add(bar.clone());
                 visible.tick();
             }

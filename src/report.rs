@@ -39,7 +39,9 @@ impl Report {
     pub fn new(manifest: &Manifest, result: &OutputResult) -> Report {
         let output = &manifest.outputs[&result.name];
         let s = &result.written.summary;
-        let domain_volume: f64 = (0..3).map(|a| output.domain_max[a] - output.domain_min[a]).product();
+        let domain_volume: f64 = (0..3)
+            .map(|a| output.domain_max[a] - output.domain_min[a])
+            .product();
         Report {
             name: result.name.clone(),
             triangles: s.triangles,
@@ -50,7 +52,10 @@ impl Report {
             volume: s.volume,
             area: s.area,
             volume_fraction: s.volume / domain_volume,
-            bbox: Bbox { min: s.bbox_min, max: s.bbox_max },
+            bbox: Bbox {
+                min: s.bbox_min,
+                max: s.bbox_max,
+            },
             files: result
                 .written
                 .files
@@ -60,7 +65,11 @@ impl Report {
             stages: result
                 .stages
                 .iter()
-                .map(|r| StageReport { stage: r.node.clone(), cached: r.cached, seconds: r.seconds })
+                .map(|r| StageReport {
+                    stage: r.node.clone(),
+                    cached: r.cached,
+                    seconds: r.seconds,
+                })
                 .collect(),
         }
     }

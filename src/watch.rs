@@ -35,12 +35,16 @@ pub fn watch(args: &BuildArgs) -> ExitCode {
         return Failure::Build(format!("cannot handle Ctrl-C: {e}")).exit();
     }
     let events = tx.clone();
-    let debouncer = new_debouncer(Duration::from_millis(200), None, move |result: DebounceEventResult| {
-        if let Ok(batch) = result {
-            let paths = batch.into_iter().flat_map(|e| e.event.paths).collect();
-            let _ = events.send(Event::Changed(paths));
-        }
-    });
+    let debouncer = new_debouncer(
+        Duration::from_millis(200),
+        None,
+        move |result: DebounceEventResult| {
+            if let Ok(batch) = result {
+                let paths = batch.into_iter().flat_map(|e| e.event.paths).collect();
+                let _ = events.send(Event::Changed(paths));
+            }
+        },
+    );
     let mut debouncer = match debouncer {
         Ok(d) => d,
         Err(e) => return Failure::Build(format!("cannot watch files: {e}")).exit(),
@@ -53,8 +57,10 @@ pub fn watch(args: &BuildArgs) -> ExitCode {
             files.extend(manifest.inputs.iter().map(|p| absolute(p)));
         }
         // Watch directories, not files: editors save by replacing the file.
-        let dirs: BTreeSet<PathBuf> =
-            files.iter().filter_map(|f| f.parent().map(Path::to_path_buf)).collect();
+        let dirs: BTreeSet<PathBuf> = files
+            .iter()
+            .filter_map(|f| f.parent().map(Path::to_path_buf))
+            .collect();
         for dir in dirs.difference(&watched_dirs) {
             if let Err(e) = debouncer.watch(dir, RecursiveMode::NonRecursive) {
                 eprintln!("warning: cannot watch `{}`: {e}", dir.display());
@@ -71,7 +77,10 @@ pub fn watch(args: &BuildArgs) -> ExitCode {
             Err(Failure::Build(text)) => eprintln!("error: {text}"),
         }
         if !args.quiet {
-            eprintln!("watching `{}` for changes (Ctrl-C to stop)", args.manifest.manifest.display());
+            eprintln!(
+                "watching `{}` for changes (Ctrl-C to stop)",
+                args.manifest.manifest.display()
+            );
         }
         // Wait for a change to a file that matters; fold a burst of saves into one rebuild.
         loop {

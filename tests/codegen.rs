@@ -4,9 +4,20 @@
 #[test]
 fn tpms_table_in_docs_is_current() {
     let status = std::process::Command::new(env!("CARGO"))
-        .args(["run", "--quiet", "--package", "xtask", "--", "codegen", "--check"])
+        .args([
+            "run",
+            "--quiet",
+            "--package",
+            "xtask",
+            "--",
+            "codegen",
+            "--check",
+        ])
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .status()
         .expect("run xtask");
-    assert!(status.success(), "docs/manifest.md is stale: run `cargo xtask codegen`");
+    assert!(
+        status.success(),
+        "docs/manifest.md is stale: run `cargo xtask codegen`"
+    );
 }

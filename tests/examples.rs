@@ -22,14 +22,34 @@ fn every_example_builds_watertight_manifold_outputs() {
             .arg(&manifest)
             .output()
             .expect("run");
-        assert!(out.status.success(), "{}: {}", path.display(), String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}: {}",
+            path.display(),
+            String::from_utf8_lossy(&out.stderr)
+        );
         let reports: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
         for r in reports.as_array().expect("array") {
-            assert_eq!(r["watertight"], true, "{}: {} is not watertight", path.display(), r["name"]);
-            assert_eq!(r["manifold"], true, "{}: {} is not manifold", path.display(), r["name"]);
+            assert_eq!(
+                r["watertight"],
+                true,
+                "{}: {} is not watertight",
+                path.display(),
+                r["name"]
+            );
+            assert_eq!(
+                r["manifold"],
+                true,
+                "{}: {} is not manifold",
+                path.display(),
+                r["name"]
+            );
             assert!(r["triangles"].as_u64().expect("count") > 0);
             for f in r["files"].as_array().expect("files") {
-                assert!(Path::new(f.as_str().expect("path")).is_file(), "{f} missing");
+                assert!(
+                    Path::new(f.as_str().expect("path")).is_file(),
+                    "{f} missing"
+                );
             }
         }
         count += 1;

@@ -12,7 +12,9 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn cases(kind: &str) -> Vec<PathBuf> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden").join(kind);
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/golden")
+        .join(kind);
     let mut dirs: Vec<PathBuf> = std::fs::read_dir(&root)
         .expect("golden dir")
         .map(|e| e.expect("entry").path())
@@ -29,13 +31,25 @@ fn blessing() -> bool {
 /// Runs the case in a scratch copy, so neither outputs nor cache land in the source tree.
 fn run_case(case: &Path, extra: &[&str]) -> std::process::Output {
     let scratch = tempfile::tempdir().expect("tempdir");
-    std::fs::copy(case.join("lattice.toml"), scratch.path().join("lattice.toml")).expect("copy");
+    std::fs::copy(
+        case.join("lattice.toml"),
+        scratch.path().join("lattice.toml"),
+    )
+    .expect("copy");
     let mut args: Vec<String> = vec!["build".into(), "lattice.toml".into()];
     if let Ok(text) = std::fs::read_to_string(case.join("args")) {
-        args.extend(text.lines().filter(|l| !l.trim().is_empty()).map(str::to_string));
+        args.extend(
+            text.lines()
+                .filter(|l| !l.trim().is_empty())
+                .map(str::to_string),
+        );
     }
     args.extend(extra.iter().map(|s| s.to_string()));
-    Command::new(common::BIN).args(&args).current_dir(scratch.path()).output().expect("run")
+    Command::new(common::BIN)
+        .args(&args)
+        .current_dir(scratch.path())
+        .output()
+        .expect("run")
 }
 
 fn check(expected_file: &Path, actual: &str, case: &Path) -> Result<(), String> {
@@ -85,11 +99,20 @@ fn golden_ok_cases() {
         let out = run_case(&case, &["--report", "-", "-q"]);
         let stderr = String::from_utf8_lossy(&out.stderr);
         if !out.status.success() || !stderr.is_empty() {
-            failures.push(format!("{}: expected a clean build, got {}\n{stderr}", case.display(), out.status));
+            failures.push(format!(
+                "{}: expected a clean build, got {}\n{stderr}",
+                case.display(),
+                out.status
+            ));
             continue;
         }
         let reports: serde_json::Value = serde_json::from_slice(&out.stdout).expect("report");
-        let summary: String = reports.as_array().expect("array").iter().map(summarize).collect();
+        let summary: String = reports
+            .as_array()
+            .expect("array")
+            .iter()
+            .map(summarize)
+            .collect();
         if let Err(e) = check(&case.join("summary.txt"), &summary, &case) {
             failures.push(e);
         }
@@ -103,7 +126,11 @@ fn golden_err_cases() {
     for case in cases("err") {
         let out = run_case(&case, &[]);
         if out.status.code() != Some(2) {
-            failures.push(format!("{}: expected exit code 2, got {}", case.display(), out.status));
+            failures.push(format!(
+                "{}: expected exit code 2, got {}",
+                case.display(),
+                out.status
+            ));
         }
         if !out.stdout.is_empty() {
             failures.push(format!("{}: expected nothing on stdout", case.display()));

@@ -33,7 +33,14 @@ fn second_build_runs_nothing() {
     let first = p.build(&[]);
     assert_eq!(
         ran(&first),
-        ["cell:g", "cell:p", "contour:a", "contour:b", "write:a", "write:b"]
+        [
+            "cell:g",
+            "cell:p",
+            "contour:a",
+            "contour:b",
+            "write:a",
+            "write:b"
+        ]
     );
     let second = p.build(&[]);
     assert!(ran(&second).is_empty(), "ran {:?}", ran(&second));
@@ -45,7 +52,13 @@ fn comments_and_table_order_do_not_rebuild() {
     p.build(&[]);
     // Move output `b` before the cells and change comments and spacing.
     let (head, b) = MANIFEST.split_at(MANIFEST.find("[outputs.b]").expect("b"));
-    p.write("lattice.toml", &format!("# another comment\n{b}\n\n{}\n# end", head.replace("# a comment", "")));
+    p.write(
+        "lattice.toml",
+        &format!(
+            "# another comment\n{b}\n\n{}\n# end",
+            head.replace("# a comment", "")
+        ),
+    );
     assert!(ran(&p.build(&[])).is_empty());
 }
 
@@ -73,7 +86,11 @@ fn an_equivalent_cell_name_stops_the_rebuild_at_the_cell() {
     // `schwarz-p` is an alias of `p`: the cell reruns, produces the same formula, and the
     // contour keyed on that formula stays cached.
     let reports = p.build(&["--set", "cells.p.tpms=schwarz-p"]);
-    assert!(ran(&reports).is_empty() || ran(&reports) == ["cell:p"], "ran {:?}", ran(&reports));
+    assert!(
+        ran(&reports).is_empty() || ran(&reports) == ["cell:p"],
+        "ran {:?}",
+        ran(&reports)
+    );
 }
 
 #[test]
@@ -87,7 +104,10 @@ fn deleted_output_files_are_rewritten() {
 }
 
 fn outputs(p: &Project) -> Vec<Vec<u8>> {
-    ["a.stl", "b.ply"].iter().map(|f| std::fs::read(p.out(f)).expect("output")).collect()
+    ["a.stl", "b.ply"]
+        .iter()
+        .map(|f| std::fs::read(p.out(f)).expect("output"))
+        .collect()
 }
 
 #[test]
@@ -123,7 +143,11 @@ fn truncated_cache_entries_are_rebuilt() {
             let path = e.expect("entry").path();
             if path.is_dir() {
                 stack.push(path);
-            } else if path.parent().and_then(|d| d.parent()).is_some_and(|d| d.ends_with("objects")) {
+            } else if path
+                .parent()
+                .and_then(|d| d.parent())
+                .is_some_and(|d| d.ends_with("objects"))
+            {
                 entries.push(path);
             }
         }
@@ -131,7 +155,10 @@ fn truncated_cache_entries_are_rebuilt() {
     assert!(!entries.is_empty());
     for entry in &entries {
         let len = std::fs::metadata(entry).expect("meta").len();
-        let f = std::fs::OpenOptions::new().write(true).open(entry).expect("open");
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(entry)
+            .expect("open");
         f.set_len(len / 2).expect("truncate");
     }
     // Every output file must be rewritten identically even though every entry is broken.
@@ -140,7 +167,10 @@ fn truncated_cache_entries_are_rebuilt() {
     }
     p.build(&[]);
     assert_eq!(outputs(&p), before);
-    assert!(ran(&p.build(&[])).is_empty(), "the rebuilt entries are good again");
+    assert!(
+        ran(&p.build(&[])).is_empty(),
+        "the rebuilt entries are good again"
+    );
 }
 
 #[test]
@@ -150,9 +180,19 @@ fn graph_marks_cached_and_stale_nodes() {
     assert!(before.lines().all(|l| l.contains("stale")), "{before}");
     p.build(&[]);
     let after = String::from_utf8(p.run(&["graph", "lattice.toml"]).stdout).expect("utf8");
-    assert_eq!(after.lines().filter(|l| l.contains("cached")).count(), 6, "{after}");
+    assert_eq!(
+        after.lines().filter(|l| l.contains("cached")).count(),
+        6,
+        "{after}"
+    );
     let changed = p.run(&["graph", "lattice.toml", "--set", "outputs.a.samples=33"]);
     let text = String::from_utf8(changed.stdout).expect("utf8");
-    let contour = text.lines().find(|l| l.starts_with("contour:a")).expect("contour:a line");
-    assert!(contour.contains("stale") && contour.contains("samples"), "{contour}");
+    let contour = text
+        .lines()
+        .find(|l| l.starts_with("contour:a"))
+        .expect("contour:a line");
+    assert!(
+        contour.contains("stale") && contour.contains("samples"),
+        "{contour}"
+    );
 }

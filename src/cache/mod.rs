@@ -149,9 +149,15 @@ impl Cache {
         self.store.put(key, payload)
     }
 
-    /// Stores the concatenation of `parts` under `key`, without joining them in memory.
-    pub fn put_parts(&self, key: &Key, parts: &[&[u8]]) -> Result<ContentHash, CacheError> {
-        self.store.put_parts(key, parts)
+    /// Stores the concatenation of `parts` under `key`, without joining them in memory; `hash`
+    /// must be [`ContentHash::of_parts`] of them, computed by the caller beforehand.
+    pub fn put_parts(
+        &self,
+        key: &Key,
+        parts: &[&[u8]],
+        hash: ContentHash,
+    ) -> Result<(), CacheError> {
+        self.store.put_parts(key, parts, hash)
     }
 
     /// Whether an entry for `key` exists (not verified).

@@ -44,8 +44,10 @@ pub trait Store: Send + Sync {
     /// Stores `payload` under `key`, replacing any entry, and returns the payload's hash.
     /// Concurrent puts of the same key all succeed.
     fn put(&self, key: &Key, payload: &[u8]) -> Result<ContentHash, CacheError>;
-    /// Stores the concatenation of `parts` (large payloads need not be joined in memory).
-    fn put_parts(&self, key: &Key, parts: &[&[u8]]) -> Result<ContentHash, CacheError>;
+    /// Stores the concatenation of `parts` (large payloads need not be joined in memory), whose
+    /// hash the caller computed with [`ContentHash::of_parts`] (so it can key downstream work
+    /// while this write runs elsewhere).
+    fn put_parts(&self, key: &Key, parts: &[&[u8]], hash: ContentHash) -> Result<(), CacheError>;
     /// Whether an entry exists, without verifying it.
     fn contains(&self, key: &Key) -> Result<bool, CacheError>;
     /// Removes the entry; `false` if there was none.
@@ -207,11 +209,16 @@ impl Store for LocalStore {
     }
 
     fn put(&self, key: &Key, payload: &[u8]) -> Result<ContentHash, CacheError> {
-        self.put_parts(key, &[payload])
+        let hash = ContentHash::of(payload);
+        self.put_parts(key, &[payload], hash)?;
+        Ok(hash)
     }
 
-    fn put_parts(&self, key: &Key, parts: &[&[u8]]) -> Result<ContentHash, CacheError> {
-        let hash = ContentHash::of_parts(parts);
+    fn put_parts(&self, key: &Key, parts: &[&[u8]], hash: ContentHash) -> Result<(), CacheError> {
+        debug_assert!(
+            hash == ContentHash::of_parts(parts),
+            "put_parts with a wrong hash"
+        );
         let payload_len: usize = parts.iter().map(|p| p.len()).sum();
         let path = self.entry_path(key);
         if let Some(dir) = path.parent() {
@@ -227,7 +234,7 @@ impl Store for LocalStore {
             w.write_all(&header)?;
             parts.iter().try_for_each(|part| w.write_all(part))
         })?;
-        Ok(hash)
+        Ok(())
     }
 
     fn contains(&self, key: &Key) -> Result<bool, CacheError> {

@@ -46,10 +46,17 @@ impl Graph {
         for (name, output) in &manifest.outputs {
             let cell = &manifest.cells[&output.cell];
             let cell_node = *cell_nodes.entry(output.cell.as_str()).or_insert_with(|| {
-                graph.push(format!("cell:{}", cell.name.text), Stage::cell(cell), vec![])
+                graph.push(
+                    format!("cell:{}", cell.name.text),
+                    Stage::cell(cell),
+                    vec![],
+                )
             });
-            let contour =
-                graph.push(format!("contour:{name}"), Stage::contour(output), vec![cell_node]);
+            let contour = graph.push(
+                format!("contour:{name}"),
+                Stage::contour(output),
+                vec![cell_node],
+            );
             let write = graph.push(format!("write:{name}"), Stage::write(output), vec![contour]);
             graph.outputs.insert(name.clone(), write);
         }
@@ -58,7 +65,11 @@ impl Graph {
     }
 
     fn push(&mut self, name: String, stage: Stage, inputs: Vec<NodeId>) -> NodeId {
-        self.nodes.push(Node { name, stage, inputs });
+        self.nodes.push(Node {
+            name,
+            stage,
+            inputs,
+        });
         self.nodes.len() - 1
     }
 
@@ -91,14 +102,19 @@ impl Graph {
                 stack.push((next, t));
             }
         }
-        path.into_iter().map(|id| self.nodes[id].name.clone()).collect()
+        path.into_iter()
+            .map(|id| self.nodes[id].name.clone())
+            .collect()
     }
 
     /// The nodes needed for `targets` (output names; all outputs when empty), in order.
     /// Unknown target names are returned as the error.
     pub fn needed(&self, targets: &[String]) -> Result<Vec<NodeId>, Vec<String>> {
-        let unknown: Vec<String> =
-            targets.iter().filter(|t| !self.outputs.contains_key(*t)).cloned().collect();
+        let unknown: Vec<String> = targets
+            .iter()
+            .filter(|t| !self.outputs.contains_key(*t))
+            .cloned()
+            .collect();
         if !unknown.is_empty() {
             return Err(unknown);
         }

@@ -13,7 +13,8 @@ pub fn lines(graph: &Graph, cache: &Cache, sink: &dyn OutputSink) -> Vec<String>
     let width = graph.nodes.iter().map(|n| n.name.len()).max().unwrap_or(0);
     let mut out = Vec::new();
     for (id, node) in graph.nodes.iter().enumerate() {
-        let inputs: Option<Vec<ContentHash>> = node.inputs.iter().map(|i| hashes.get(i).copied()).collect();
+        let inputs: Option<Vec<ContentHash>> =
+            node.inputs.iter().map(|i| hashes.get(i).copied()).collect();
         let status = match inputs {
             None => "stale    (an input will be rebuilt)".to_string(),
             Some(inputs) => match node.stage.key(&inputs) {
@@ -25,20 +26,36 @@ pub fn lines(graph: &Graph, cache: &Cache, sink: &dyn OutputSink) -> Vec<String>
                     }
                     Some(_) => "stale    (an output file is missing or was changed)".to_string(),
                     None => match cache.previous(&node.name) {
-                        Some(prev) => format!("stale    ({})", explain(&prev.description, &desc).join("; ")),
+                        Some(prev) => format!(
+                            "stale    ({})",
+                            explain(&prev.description, &desc).join("; ")
+                        ),
                         None => "stale    (never built)".to_string(),
                     },
                 },
             },
         };
-        let reads: Vec<&str> = node.inputs.iter().map(|&i| graph.nodes[i].name.as_str()).collect();
-        let arrow = if reads.is_empty() { String::new() } else { format!("  <- {}", reads.join(", ")) };
+        let reads: Vec<&str> = node
+            .inputs
+            .iter()
+            .map(|&i| graph.nodes[i].name.as_str())
+            .collect();
+        let arrow = if reads.is_empty() {
+            String::new()
+        } else {
+            format!("  <- {}", reads.join(", "))
+        };
         out.push(format!("{:<width$}  {status}{arrow}", node.name));
     }
     out
 }
 
-fn write_is_current(node: &super::Node, cache: &Cache, key: &crate::cache::Key, sink: &dyn OutputSink) -> bool {
+fn write_is_current(
+    node: &super::Node,
+    cache: &Cache,
+    key: &crate::cache::Key,
+    sink: &dyn OutputSink,
+) -> bool {
     if !matches!(node.stage, Stage::Write(_)) {
         return true;
     }

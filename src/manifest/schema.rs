@@ -137,9 +137,14 @@ pub(crate) fn validate(
         Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
         _ => PathBuf::from("."),
     };
+    // `out`, not `./out`, for a manifest in the current directory: paths in reports read better.
+    let out_dir = match manifest_path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent.join(out_dir?),
+        _ => PathBuf::from(out_dir?),
+    };
     Some(Manifest {
         path: manifest_path.to_path_buf(),
-        out_dir: root.join(out_dir?),
+        out_dir,
         root,
         cells,
         outputs,

@@ -913,7 +913,7 @@ fn empty_manifest_is_valid() {
     let manifest = parse_ok("", &[]);
     assert!(manifest.cells.is_empty() && manifest.outputs.is_empty() && manifest.inputs.is_empty());
     assert_eq!(manifest.root, PathBuf::from("."));
-    assert_eq!(manifest.out_dir, PathBuf::from("./out"));
+    assert_eq!(manifest.out_dir, PathBuf::from("out"));
 }
 
 #[test]

@@ -80,29 +80,49 @@ impl MeshArtifact {
 
     /// The raw vertex and triangle arrays that follow the head.
     pub fn arrays(&self) -> [&[u8]; 2] {
-        [bytemuck::cast_slice(&self.mesh.vertices), bytemuck::cast_slice(&self.mesh.triangles)]
+        [
+            bytemuck::cast_slice(&self.mesh.vertices),
+            bytemuck::cast_slice(&self.mesh.triangles),
+        ]
     }
 
     pub fn decode(payload: &[u8]) -> Result<MeshArtifact, String> {
         let bad = |what: &str| format!("malformed mesh payload: {what}");
         let take = |at: usize| -> Result<u64, String> {
-            let bytes = payload.get(at..at + 8).ok_or_else(|| bad("truncated header"))?;
-            Ok(u64::from_le_bytes(bytes.try_into().map_err(|_| bad("header"))?))
+            let bytes = payload
+                .get(at..at + 8)
+                .ok_or_else(|| bad("truncated header"))?;
+            Ok(u64::from_le_bytes(
+                bytes.try_into().map_err(|_| bad("header"))?,
+            ))
         };
         if payload.get(..8) != Some(MESH_MAGIC.as_slice()) {
             return Err(bad("wrong magic"));
         }
         let (nv, nt, ns) = (take(8)? as usize, take(16)? as usize, take(24)? as usize);
-        let summary_end = 32usize.checked_add(ns).ok_or_else(|| bad("summary length"))?;
-        let vertices_end = summary_end.checked_add(nv * 12).ok_or_else(|| bad("vertex count"))?;
-        let end = vertices_end.checked_add(nt * 12).ok_or_else(|| bad("triangle count"))?;
+        let summary_end = 32usize
+            .checked_add(ns)
+            .ok_or_else(|| bad("summary length"))?;
+        let vertices_end = summary_end
+            .checked_add(nv * 12)
+            .ok_or_else(|| bad("vertex count"))?;
+        let end = vertices_end
+            .checked_add(nt * 12)
+            .ok_or_else(|| bad("triangle count"))?;
         if payload.len() != end {
             return Err(bad("length does not match the counts"));
         }
-        let summary = serde_json::from_slice(&payload[32..summary_end]).map_err(|e| bad(&e.to_string()))?;
+        let summary =
+            serde_json::from_slice(&payload[32..summary_end]).map_err(|e| bad(&e.to_string()))?;
         let vertices = bytemuck::pod_collect_to_vec(&payload[summary_end..vertices_end]);
         let triangles = bytemuck::pod_collect_to_vec(&payload[vertices_end..end]);
-        Ok(MeshArtifact { mesh: Mesh { vertices, triangles }, summary })
+        Ok(MeshArtifact {
+            mesh: Mesh {
+                vertices,
+                triangles,
+            },
+            summary,
+        })
     }
 }
 

@@ -16,7 +16,9 @@ pub struct CellStage {
 
 impl CellStage {
     pub fn new(cell: &Cell) -> CellStage {
-        CellStage { source: cell.source.clone() }
+        CellStage {
+            source: cell.source.clone(),
+        }
     }
 
     pub fn key_params(&self, key: KeyBuilder) -> KeyBuilder {

@@ -49,7 +49,10 @@ impl ContourStage {
             .param("solid", solid)
             .param("offset", offset)
             .param("thickness", thickness)
-            .param("samples", Param::List(self.samples.iter().map(|&n| Param::U64(n as u64)).collect()))
+            .param(
+                "samples",
+                Param::List(self.samples.iter().map(|&n| Param::U64(n as u64)).collect()),
+            )
     }
 
     /// Number of progress steps [`ContourStage::run`] reports.
@@ -58,12 +61,21 @@ impl ContourStage {
     }
 
     /// Contours the cell whose formula is `cell_payload`; `progress(n)` advances by steps.
-    pub fn run(&self, cell_payload: &[u8], progress: &(dyn Fn(usize) + Sync)) -> Result<MeshArtifact, String> {
-        let formula = std::str::from_utf8(cell_payload).map_err(|_| "cell payload is not UTF-8".to_string())?;
-        let field = expr::compile(formula).map_err(|e| format!("cell formula does not compile: {}", e.message))?;
+    pub fn run(
+        &self,
+        cell_payload: &[u8],
+        progress: &(dyn Fn(usize) + Sync),
+    ) -> Result<MeshArtifact, String> {
+        let formula = std::str::from_utf8(cell_payload)
+            .map_err(|_| "cell payload is not UTF-8".to_string())?;
+        let field = expr::compile(formula)
+            .map_err(|e| format!("cell formula does not compile: {}", e.message))?;
         let model = Grid::spanning(self.domain_min, self.domain_max, self.samples);
         let cell_grid = model.scaled_down(self.cell_size);
-        let sampler = SolidSampler { inner: field.sampler(&cell_grid), solid: self.solid };
+        let sampler = SolidSampler {
+            inner: field.sampler(&cell_grid),
+            solid: self.solid,
+        };
         let mesh = contour(&sampler, &model, progress).map_err(|e| e.to_string())?;
         let summary = MeshSummary::from_check(&validate::check(&mesh));
         Ok(MeshArtifact { mesh, summary })

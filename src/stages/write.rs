@@ -36,11 +36,19 @@ pub struct WriteStage {
 
 impl WriteStage {
     pub fn new(output: &Output) -> WriteStage {
-        WriteStage { formats: output.formats.clone(), encoding: output.encoding, stem: output.stem.clone() }
+        WriteStage {
+            formats: output.formats.clone(),
+            encoding: output.encoding,
+            stem: output.stem.clone(),
+        }
     }
 
     pub fn key_params(&self, key: KeyBuilder) -> KeyBuilder {
-        let formats = self.formats.iter().map(|f| Param::Str(f.name().to_string())).collect();
+        let formats = self
+            .formats
+            .iter()
+            .map(|f| Param::Str(f.name().to_string()))
+            .collect();
         key.param("formats", Param::List(formats))
             .param("ascii", self.encoding == Encoding::Ascii)
             .param("path", self.stem.as_str())
@@ -52,18 +60,32 @@ impl WriteStage {
     }
 
     /// Writes every format (in parallel: each writer streams on its own).
-    pub fn run(&self, artifact: &MeshArtifact, sink: &dyn OutputSink) -> Result<WrittenOutput, String> {
+    pub fn run(
+        &self,
+        artifact: &MeshArtifact,
+        sink: &dyn OutputSink,
+    ) -> Result<WrittenOutput, String> {
         let files = self
             .formats
             .par_iter()
             .map(|&format| {
                 let path = self.path(format);
                 let (bytes, modified_ns) = sink
-                    .write_file(&path, &mut |w| mesh_io::write_mesh(&artifact.mesh, format, self.encoding, w))
+                    .write_file(&path, &mut |w| {
+                        mesh_io::write_mesh(&artifact.mesh, format, self.encoding, w)
+                    })
                     .map_err(|e| format!("cannot write `{path}`: {e}"))?;
-                Ok(WrittenFile { path, format: format.name().to_string(), bytes, modified_ns })
+                Ok(WrittenFile {
+                    path,
+                    format: format.name().to_string(),
+                    bytes,
+                    modified_ns,
+                })
             })
             .collect::<Result<Vec<_>, String>>()?;
-        Ok(WrittenOutput { files, summary: artifact.summary.clone() })
+        Ok(WrittenOutput {
+            files,
+            summary: artifact.summary.clone(),
+        })
     }
 }

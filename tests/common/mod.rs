@@ -28,7 +28,11 @@ impl Project {
 
     /// Runs `latticebuild ARGS` in the project directory.
     pub fn run(&self, args: &[&str]) -> Output {
-        Command::new(BIN).args(args).current_dir(self.path()).output().expect("run latticebuild")
+        Command::new(BIN)
+            .args(args)
+            .current_dir(self.path())
+            .output()
+            .expect("run latticebuild")
     }
 
     /// Builds with `--report -` and returns the parsed reports; panics on failure.

@@ -13,9 +13,11 @@ fn main() -> ExitCode {
         Some("golden") => golden(args.iter().any(|a| a == "--bless")),
         Some("bench") => bench(&args[1..]),
         Some("codegen") => codegen(args.iter().any(|a| a == "--check")),
-        _ => Err("usage: cargo xtask golden [--bless] | bench [--sizes 200,400,800] [--no-peers] \
+        _ => Err(
+            "usage: cargo xtask golden [--bless] | bench [--sizes 200,400,800] [--no-peers] \
                   [--field separable|dense] | codegen [--check]"
-            .to_string()),
+                .to_string(),
+        ),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -27,12 +29,21 @@ fn main() -> ExitCode {
 }
 
 fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("workspace root").to_path_buf()
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("workspace root")
+        .to_path_buf()
 }
 
 fn run(cmd: &mut Command) -> Result<(), String> {
-    let status = cmd.status().map_err(|e| format!("cannot run {cmd:?}: {e}"))?;
-    if status.success() { Ok(()) } else { Err(format!("{cmd:?} failed: {status}")) }
+    let status = cmd
+        .status()
+        .map_err(|e| format!("cannot run {cmd:?}: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("{cmd:?} failed: {status}"))
+    }
 }
 
 /// Runs the golden tests; with `--bless`, rewrites their expected files first.
@@ -47,10 +58,18 @@ fn golden(bless: bool) -> Result<(), String> {
 
 /// The generated TPMS table of `docs/manifest.md`.
 pub fn tpms_table() -> String {
-    let mut s = String::from("| name | paper | formula (x, y, z in cells; τ = 2π) |\n|---|---|---|\n");
+    let mut s =
+        String::from("| name | paper | formula (x, y, z in cells; τ = 2π) |\n|---|---|---|\n");
     for surface in &latticebuild_geom::tpms::LIBRARY {
-        let formula = surface.formula.split_whitespace().collect::<Vec<_>>().join(" ");
-        s.push_str(&format!("| `{}` | {} | `{}` |\n", surface.name, surface.title, formula));
+        let formula = surface
+            .formula
+            .split_whitespace()
+            .collect::<Vec<_>>()
+            .join(" ");
+        s.push_str(&format!(
+            "| `{}` | {} | `{}` |\n",
+            surface.name, surface.title, formula
+        ));
     }
     s.push_str("\nAliases: ");
     let aliases: Vec<String> = latticebuild_geom::tpms::ALIASES
@@ -67,10 +86,19 @@ const TABLE_END: &str = "<!-- /tpms-table -->";
 
 /// `docs/manifest.md` with the TPMS table between the markers regenerated.
 fn with_table(doc: &str) -> Result<String, String> {
-    let start = doc.find(TABLE_START).ok_or("docs/manifest.md has no <!-- tpms-table --> marker")?;
+    let start = doc
+        .find(TABLE_START)
+        .ok_or("docs/manifest.md has no <!-- tpms-table --> marker")?;
     let after = start + TABLE_START.len();
-    let end = doc[after..].find(TABLE_END).map_or(after, |e| after + e + TABLE_END.len());
-    Ok(format!("{}{TABLE_START}\n{}{TABLE_END}{}", &doc[..start], tpms_table(), &doc[end..]))
+    let end = doc[after..]
+        .find(TABLE_END)
+        .map_or(after, |e| after + e + TABLE_END.len());
+    Ok(format!(
+        "{}{TABLE_START}\n{}{TABLE_END}{}",
+        &doc[..start],
+        tpms_table(),
+        &doc[end..]
+    ))
 }
 
 fn codegen(check: bool) -> Result<(), String> {
@@ -78,7 +106,11 @@ fn codegen(check: bool) -> Result<(), String> {
     let doc = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
     let new = with_table(&doc)?;
     if check {
-        return if new == doc { Ok(()) } else { Err("docs/manifest.md is stale: run `cargo xtask codegen`".into()) };
+        return if new == doc {
+            Ok(())
+        } else {
+            Err("docs/manifest.md is stale: run `cargo xtask codegen`".into())
+        };
     }
     std::fs::write(&path, new).map_err(|e| format!("{}: {e}", path.display()))
 }
@@ -93,7 +125,12 @@ fn timed(cmd: &mut Command) -> Result<Timing, String> {
     let log = std::env::temp_dir().join(format!("xtask-time-{}.txt", std::process::id()));
     let program = cmd.get_program().to_owned();
     let mut timed = Command::new("/usr/bin/time");
-    timed.arg("-v").arg("-o").arg(&log).arg(program).args(cmd.get_args());
+    timed
+        .arg("-v")
+        .arg("-o")
+        .arg(&log)
+        .arg(program)
+        .args(cmd.get_args());
     if let Some(dir) = cmd.get_current_dir() {
         timed.current_dir(dir);
     }
@@ -103,7 +140,9 @@ fn timed(cmd: &mut Command) -> Result<Timing, String> {
             None => timed.env_remove(k),
         };
     }
-    let out = timed.output().map_err(|e| format!("cannot run /usr/bin/time: {e}"))?;
+    let out = timed
+        .output()
+        .map_err(|e| format!("cannot run /usr/bin/time: {e}"))?;
     if !out.status.success() {
         return Err(format!(
             "{:?} failed: {}\n{}",
@@ -113,10 +152,22 @@ fn timed(cmd: &mut Command) -> Result<Timing, String> {
         ));
     }
     let text = std::fs::read_to_string(&log).map_err(|e| e.to_string())?;
-    let field = |name: &str| text.lines().find_map(|l| l.trim().strip_prefix(name).map(str::trim).map(str::to_string));
+    let field = |name: &str| {
+        text.lines().find_map(|l| {
+            l.trim()
+                .strip_prefix(name)
+                .map(str::trim)
+                .map(str::to_string)
+        })
+    };
     let wall = field("Elapsed (wall clock) time (h:mm:ss or m:ss):").ok_or("no wall time")?;
-    let seconds = wall.split(':').try_fold(0.0, |acc, part| part.parse::<f64>().map(|v| acc * 60.0 + v)).map_err(|e| e.to_string())?;
-    let peak_kib = field("Maximum resident set size (kbytes):").and_then(|v| v.parse().ok()).ok_or("no peak RSS")?;
+    let seconds = wall
+        .split(':')
+        .try_fold(0.0, |acc, part| part.parse::<f64>().map(|v| acc * 60.0 + v))
+        .map_err(|e| e.to_string())?;
+    let peak_kib = field("Maximum resident set size (kbytes):")
+        .and_then(|v| v.parse().ok())
+        .ok_or("no peak RSS")?;
     Ok(Timing { seconds, peak_kib })
 }
 
@@ -129,20 +180,34 @@ fn bench(args: &[String]) -> Result<(), String> {
         match a.as_str() {
             "--sizes" => {
                 let v = it.next().ok_or("--sizes needs a list")?;
-                sizes = v.split(',').map(|s| s.parse().map_err(|_| format!("bad size `{s}`"))).collect::<Result<_, _>>()?;
+                sizes = v
+                    .split(',')
+                    .map(|s| s.parse().map_err(|_| format!("bad size `{s}`")))
+                    .collect::<Result<_, _>>()?;
             }
             "--no-peers" => peers = false,
             "--field" => field = it.next().ok_or("--field needs a value")?.clone(),
             other => return Err(format!("unknown bench argument `{other}`")),
         }
     }
-    run(Command::new(env!("CARGO")).current_dir(root()).args(["build", "--release", "--quiet", "--bin", "latticebuild"]))?;
+    run(Command::new(env!("CARGO")).current_dir(root()).args([
+        "build",
+        "--release",
+        "--quiet",
+        "--bin",
+        "latticebuild",
+    ]))?;
     let bin = root().join("target/release/latticebuild");
     let peer_dir = root().join("../shared/bench/peers");
     let scratch = std::env::temp_dir().join(format!("latticebuild-bench-{}", std::process::id()));
     std::fs::create_dir_all(&scratch).map_err(|e| e.to_string())?;
-    println!("gyroid, domain [-1,1]^3, cell_size 1, solid inside, binary PLY; cold builds (cache cleaned)");
-    println!("{:>5} {:>10} {:>10} {:>12} | peers ({field} field): seconds, peak MiB, ratio to latticebuild", "N", "seconds", "peak MiB", "triangles");
+    println!(
+        "gyroid, domain [-1,1]^3, cell_size 1, solid inside, binary PLY; cold builds (cache cleaned)"
+    );
+    println!(
+        "{:>5} {:>10} {:>10} {:>12} | peers ({field} field): seconds, peak MiB, ratio to latticebuild",
+        "N", "seconds", "peak MiB", "triangles"
+    );
     for &n in &sizes {
         let manifest = scratch.join(format!("gyroid{n}.toml"));
         std::fs::write(
@@ -152,14 +217,27 @@ fn bench(args: &[String]) -> Result<(), String> {
             ),
         )
         .map_err(|e| e.to_string())?;
-        run(Command::new(&bin).arg("clean").arg(&manifest).stderr(std::process::Stdio::null()))?;
+        run(Command::new(&bin)
+            .arg("clean")
+            .arg(&manifest)
+            .stderr(std::process::Stdio::null()))?;
         let ours = timed(Command::new(&bin).arg("build").arg(&manifest).arg("-q"))?;
-        let report = std::fs::read_to_string(scratch.join(format!("out/g{n}.report.json"))).unwrap_or_default();
+        let report = std::fs::read_to_string(scratch.join(format!("out/g{n}.report.json")))
+            .unwrap_or_default();
         let triangles = report
             .lines()
-            .find_map(|l| l.trim().strip_prefix("\"triangles\":").map(|v| v.trim().trim_end_matches(',').to_string()))
+            .find_map(|l| {
+                l.trim()
+                    .strip_prefix("\"triangles\":")
+                    .map(|v| v.trim().trim_end_matches(',').to_string())
+            })
             .unwrap_or_default();
-        let mut line = format!("{n:>5} {:>10.3} {:>10.0} {:>12} |", ours.seconds, ours.peak_kib as f64 / 1024.0, triangles);
+        let mut line = format!(
+            "{n:>5} {:>10.3} {:>10.0} {:>12} |",
+            ours.seconds,
+            ours.peak_kib as f64 / 1024.0,
+            triangles
+        );
         if peers {
             for peer in ["vtk_flyingedges", "pymcubes", "skimage"] {
                 let result = timed(
@@ -178,7 +256,10 @@ fn bench(args: &[String]) -> Result<(), String> {
                         t.peak_kib as f64 / 1024.0,
                         t.seconds / ours.seconds
                     )),
-                    Err(e) => line.push_str(&format!(" {peer} failed ({})", e.lines().next().unwrap_or(""))),
+                    Err(e) => line.push_str(&format!(
+                        " {peer} failed ({})",
+                        e.lines().next().unwrap_or("")
+                    )),
                 }
             }
         }

@@ -362,7 +362,10 @@ mod expr {
 fn row_blocks_equal_whole_planes() {
     use latticebuild_geom::field::{Grid, PlaneSampler, ScalarField};
     let grid = Grid::spanning([-0.3, 0.1, 0.0], [1.2, 0.9, 0.7], [23, 17, 5]);
-    for text in [latticebuild_geom::tpms::LIBRARY[0].formula, "sqrt(x^2 + y^2) - 0.3*z"] {
+    for text in [
+        latticebuild_geom::tpms::LIBRARY[0].formula,
+        "sqrt(x^2 + y^2) - 0.3*z",
+    ] {
         let field = latticebuild_geom::expr::compile(text).expect("compiles");
         let sampler = field.sampler(&grid);
         let nx = grid.counts[0];
@@ -371,7 +374,11 @@ fn row_blocks_equal_whole_planes() {
         for rows in [0..1, 2..9, 9..17, 16..17] {
             let mut block = vec![0.0; rows.len() * nx];
             sampler.sample_rows(3, rows.clone(), &mut block);
-            assert_eq!(block, plane[rows.start * nx..rows.end * nx], "{text} rows {rows:?}");
+            assert_eq!(
+                block,
+                plane[rows.start * nx..rows.end * nx],
+                "{text} rows {rows:?}"
+            );
         }
     }
 }
