@@ -20,22 +20,32 @@ use crate::cache::{Cache, CacheError, ContentHash, Key, Lookup, explain};
 use crate::graph::{Graph, NodeId};
 use crate::stages::{MeshArtifact, OutputSink, Stage, WrittenOutput};
 
-/// Shows the progress of one long stage; see [`crate::progress`].
+/// Shows the progress of long stages; see [`crate::progress`].
 pub trait Progress: Sync {
-    /// A callback advancing the bar of `node` by the steps passed to it; `steps` is the total.
-    fn start(&self, node: &str, steps: u64) -> Box<dyn Fn(usize) + Sync + '_>;
-    /// Called when the node finished, to clear its bar.
-    fn finish(&self, node: &str);
+    /// A bar for `node` with `steps` steps in all.
+    fn start(&self, node: &str, steps: u64) -> Box<dyn StageProgress + '_>;
+}
+
+/// The progress of one running stage. Dropping it clears its bar.
+pub trait StageProgress: Sync {
+    /// `n` more steps are done.
+    fn advance(&self, n: usize);
+    /// The stage moved on to another phase (shown beside the bar).
+    fn phase(&self, name: &str);
 }
 
 /// A progress display that shows nothing.
 pub struct NoProgress;
 
 impl Progress for NoProgress {
-    fn start(&self, _: &str, _: u64) -> Box<dyn Fn(usize) + Sync + '_> {
-        Box::new(|_| {})
+    fn start(&self, _: &str, _: u64) -> Box<dyn StageProgress + '_> {
+        Box::new(NoProgress)
     }
-    fn finish(&self, _: &str) {}
+}
+
+impl StageProgress for NoProgress {
+    fn advance(&self, _: usize) {}
+    fn phase(&self, _: &str) {}
 }
 
 /// Hands a mesh payload to a background cache write.
@@ -354,10 +364,8 @@ impl<'a> Builder<'a> {
                 let Value::Bytes(cell) = input(0) else {
                     return Err("input is not a cell".into());
                 };
-                let advance = self.progress.start(&node.name, stage.steps());
-                let result = stage.run(&cell, &*advance);
-                self.progress.finish(&node.name);
-                Ok(Value::Mesh(Arc::new(result?)))
+                let progress = self.progress.start(&node.name, stage.steps());
+                Ok(Value::Mesh(Arc::new(stage.run(&cell, &*progress)?)))
             }
             Stage::Write(stage) => {
                 let Value::Mesh(mesh) = input(0) else {

@@ -1,25 +1,23 @@
 //! Progress bars for long stages: shown only on a terminal, only when not quiet, and only once
 //! a stage has taken longer than half a second, so quick builds print nothing but summaries.
 
-use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use crate::build::Progress;
+use crate::build::{Progress, StageProgress};
 
 const DELAY: Duration = Duration::from_millis(500);
 
 pub struct Bars {
     multi: MultiProgress,
-    bars: Mutex<Vec<(String, ProgressBar)>>,
 }
 
 impl Bars {
     pub fn new() -> Bars {
         Bars {
             multi: MultiProgress::with_draw_target(ProgressDrawTarget::stderr()),
-            bars: Mutex::new(Vec::new()),
         }
     }
 }
@@ -31,40 +29,58 @@ impl Default for Bars {
 }
 
 impl Progress for Bars {
-    fn start(&self, node: &str, steps: u64) -> Box<dyn Fn(usize) + Sync + '_> {
+    fn start(&self, node: &str, steps: u64) -> Box<dyn StageProgress + '_> {
         let bar = ProgressBar::hidden();
         bar.set_length(steps);
-        let style = ProgressStyle::with_template("{prefix:>14} [{bar:30}] {percent:>3}% {elapsed}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> ");
+        let style = ProgressStyle::with_template(
+            "{prefix:>16} [{bar:30}] {percent:>3}% {elapsed:>4} {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> ");
         bar.set_style(style);
         bar.set_prefix(node.to_string());
-        if let Ok(mut bars) = self.bars.lock() {
-            bars.push((node.to_string(), bar.clone()));
-        }
-        let started = Instant::now();
-        let shown = std::sync::atomic::AtomicBool::new(false);
-        Box::new(move |n| {
-            bar.inc(n as u64);
-            if started.elapsed() > DELAY && !shown.swap(true, std::sync::atomic::Ordering::Relaxed)
-            {
-                let visible = self.multi.add(bar.clone());
-                visible.tick();
-            }
+        Box::new(Bar {
+            multi: &self.multi,
+            bar,
+            started: Instant::now(),
+            shown: AtomicBool::new(false),
         })
     }
+}
 
-    fn finish(&self, node: &str) {
-        if let Ok(mut bars) = self.bars.lock() {
-            bars.retain(|(name, bar)| {
-                if name == node {
-                    bar.finish_and_clear();
-                    self.multi.remove(bar);
-                    false
-                } else {
-                    true
-                }
-            });
+/// One stage's bar, added to the display only after [`DELAY`].
+struct Bar<'a> {
+    multi: &'a MultiProgress,
+    bar: ProgressBar,
+    started: Instant,
+    shown: AtomicBool,
+}
+
+impl Bar<'_> {
+    fn show_if_slow(&self) {
+        if self.started.elapsed() > DELAY && !self.shown.swap(true, Ordering::Relaxed) {
+            self.multi.add(self.bar.clone()).tick();
+        }
+    }
+}
+
+impl StageProgress for Bar<'_> {
+    fn advance(&self, n: usize) {
+        self.bar.inc(n as u64);
+        self.show_if_slow();
+    }
+
+    fn phase(&self, name: &str) {
+        self.bar.set_message(name.to_string());
+        self.show_if_slow();
+    }
+}
+
+impl Drop for Bar<'_> {
+    fn drop(&mut self) {
+        self.bar.finish_and_clear();
+        if self.shown.load(Ordering::Relaxed) {
+            self.multi.remove(&self.bar);
         }
     }
 }

@@ -23,7 +23,10 @@ samples = 24
 fn wait_for(what: &str, mut check: impl FnMut() -> bool) {
     let start = Instant::now();
     while !check() {
-        assert!(start.elapsed() < Duration::from_secs(30), "timed out waiting for {what}");
+        assert!(
+            start.elapsed() < Duration::from_secs(30),
+            "timed out waiting for {what}"
+        );
         std::thread::sleep(Duration::from_millis(50));
     }
 }
@@ -49,14 +52,25 @@ fn watch_rebuilds_on_save_survives_errors_and_stops_on_ctrl_c() {
     let first = report_offset_volume(&p).expect("volume");
 
     // A save that changes the solid: the report must change.
-    p.write("lattice.toml", &MANIFEST.replace("samples = 24", "samples = 24\noffset = 0.5"));
-    wait_for("the rebuild after a save", || report_offset_volume(&p).is_some_and(|v| v > first + 1e-3));
+    p.write(
+        "lattice.toml",
+        &MANIFEST.replace("samples = 24", "samples = 24\noffset = 0.5"),
+    );
+    wait_for("the rebuild after a save", || {
+        report_offset_volume(&p).is_some_and(|v| v > first + 1e-3)
+    });
 
     // A broken manifest: watch keeps running, and the next good save builds again.
     p.write("lattice.toml", "[outputs.g\n");
     std::thread::sleep(Duration::from_millis(800));
-    assert!(child.try_wait().expect("poll").is_none(), "watch exited on a broken manifest");
-    p.write("lattice.toml", &MANIFEST.replace("samples = 24", "samples = 24\noffset = -0.5"));
+    assert!(
+        child.try_wait().expect("poll").is_none(),
+        "watch exited on a broken manifest"
+    );
+    p.write(
+        "lattice.toml",
+        &MANIFEST.replace("samples = 24", "samples = 24\noffset = -0.5"),
+    );
     wait_for("the rebuild after fixing the manifest", || {
         report_offset_volume(&p).is_some_and(|v| v < first - 1e-3)
     });
@@ -71,11 +85,22 @@ fn watch_rebuilds_on_save_survives_errors_and_stops_on_ctrl_c() {
         if let Some(status) = child.try_wait().expect("poll") {
             break status;
         }
-        assert!(start.elapsed() < Duration::from_secs(30), "watch did not stop on Ctrl-C");
+        assert!(
+            start.elapsed() < Duration::from_secs(30),
+            "watch did not stop on Ctrl-C"
+        );
         std::thread::sleep(Duration::from_millis(50));
     };
     let mut stderr = String::new();
-    child.stderr.take().expect("stderr").read_to_string(&mut stderr).expect("read stderr");
+    child
+        .stderr
+        .take()
+        .expect("stderr")
+        .read_to_string(&mut stderr)
+        .expect("read stderr");
     assert!(status.success(), "watch exited with {status}\n{stderr}");
-    assert!(stderr.contains("error: invalid TOML"), "the broken manifest was reported:\n{stderr}");
+    assert!(
+        stderr.contains("error: invalid TOML"),
+        "the broken manifest was reported:\n{stderr}"
+    );
 }

@@ -7,6 +7,7 @@ use latticebuild_geom::field::{Grid, ScalarField, Solid, SolidSampler};
 use latticebuild_geom::validate;
 
 use super::artifact::{MeshArtifact, MeshSummary};
+use crate::build::StageProgress;
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::Output;
 
@@ -60,11 +61,11 @@ impl ContourStage {
         self.samples[2] as u64 - 1
     }
 
-    /// Contours the cell whose formula is `cell_payload`; `progress(n)` advances by steps.
+    /// Contours the cell whose formula is `cell_payload`, then checks the mesh.
     pub fn run(
         &self,
         cell_payload: &[u8],
-        progress: &(dyn Fn(usize) + Sync),
+        progress: &dyn StageProgress,
     ) -> Result<MeshArtifact, String> {
         let formula = std::str::from_utf8(cell_payload)
             .map_err(|_| "cell payload is not UTF-8".to_string())?;
@@ -76,7 +77,10 @@ impl ContourStage {
             inner: field.sampler(&cell_grid),
             solid: self.solid,
         };
-        let mesh = contour(&sampler, &model, progress).map_err(|e| e.to_string())?;
+        progress.phase("contouring");
+        let mesh =
+            contour(&sampler, &model, &|n| progress.advance(n)).map_err(|e| e.to_string())?;
+        progress.phase("checking the mesh");
         let summary = MeshSummary::from_check(&validate::check(&mesh));
         Ok(MeshArtifact { mesh, summary })
     }
