@@ -51,7 +51,8 @@
 //! cache-sized hash tables; (3) a counting sort lists, for every vertex, the two other corners
 //! of each triangle at it (compressed rows); (4) every vertex examines its own fan locally, and
 //! each edge `{a, b}` with `a < b` is classified from vertex `a` only, so no global edge table
-//! is needed.
+//! is needed. Besides the mesh, the passes hold about 24 bytes per triangle (the per-vertex
+//! lists) and a few tens of bytes per vertex.
 
 use crate::mesh::Mesh;
 use rayon::prelude::*;
