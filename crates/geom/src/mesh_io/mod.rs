@@ -2,6 +2,88 @@
 //!
 //! Invariant: writers never open files; the caller hands them a buffered writer (the CLI
 //! writes to a temporary file and renames it into place).
+//!
+//! Further invariants of [`write_mesh`]:
+//! - The input is checked before the first byte is written: every triangle index must be in
+//!   range and every coordinate finite, or the call fails with `InvalidInput` and writes nothing.
+//!   Format limits (32-bit counts and indices) are checked the same way.
+//! - Text and binary encodings hold the same values: text prints each `f32` with the shortest
+//!   decimal that parses back to it bit for bit.
+//! - Every vertex is written by the indexed formats (PLY, OBJ, OFF, VTK), so indices in the file
+//!   are the mesh's own (plus one for OBJ). STL has no indices and repeats positions per facet.
+//! - Output is produced in blocks of about 1 MiB, encoded in parallel and written in order with
+//!   `write_all`; any error of `out` is returned as is, and the writer is flushed at the end.
+
+mod encode;
+mod obj;
+mod off;
+mod ply;
+mod stl;
+mod vtk;
+
+use crate::mesh::Mesh;
+use rayon::prelude::*;
+use std::io::{self, Write};
+
+/// Writes `mesh` to `out` in `format`. `encoding` chooses binary or text for STL, PLY and VTK
+/// and is ignored by OBJ and OFF, which are always text.
+pub fn write_mesh(
+    mesh: &Mesh,
+    format: Format,
+    encoding: Encoding,
+    out: &mut dyn Write,
+) -> io::Result<()> {
+    check_input(mesh)?;
+    match format {
+        Format::Stl => stl::write(mesh, encoding, out)?,
+        Format::Ply => ply::write(mesh, encoding, out)?,
+        Format::Obj => obj::write(mesh, out)?,
+        Format::Off => off::write(mesh, out)?,
+        Format::Vtk => vtk::write(mesh, encoding, out)?,
+    }
+    out.flush()
+}
+
+/// Rejects meshes that no format can represent faithfully: an out-of-range index would make
+/// the writers fail halfway (STL) or write a corrupt file (the others), and a non-finite
+/// coordinate is not a point (most readers reject `NaN`/`inf`).
+fn check_input(mesh: &Mesh) -> io::Result<()> {
+    // Branch-free folds over fixed chunks vectorize; the slow search for the culprit only runs
+    // once a chunk is known to hold one.
+    const CHUNK: usize = 1 << 16;
+    let n = mesh.vertices.len();
+    let index_in_range = |tri: &[u32; 3]| tri.iter().all(|&i| (i as usize) < n);
+    let indices_ok = mesh.triangles.par_chunks(CHUNK).all(|chunk| {
+        let largest = chunk.iter().flatten().fold(0, |m: u32, &i| m.max(i));
+        (largest as usize) < n
+    });
+    if !indices_ok && let Some(t) = mesh.triangles.iter().position(|tri| !index_in_range(tri)) {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!(
+                "triangle {t} {:?} indexes past the {n} vertices",
+                mesh.triangles[t]
+            ),
+        ));
+    }
+    let finite = |p: &[f32; 3]| p.iter().all(|c| c.is_finite());
+    let coordinates_ok = mesh.vertices.par_chunks(CHUNK).all(|chunk| {
+        chunk
+            .iter()
+            .flatten()
+            .fold(true, |ok, c| ok & c.is_finite())
+    });
+    if !coordinates_ok && let Some(v) = mesh.vertices.iter().position(|p| !finite(p)) {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!(
+                "vertex {v} {:?} has a non-finite coordinate",
+                mesh.vertices[v]
+            ),
+        ));
+    }
+    Ok(())
+}
 
 /// A mesh file format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]

@@ -1,0 +1,189 @@
+//! Shared machinery of the writers: block-parallel record encoding and text number formatting.
+//!
+//! Invariant: the bytes written are exactly those a sequential loop over the records would
+//! produce; parallelism only changes who encodes a block, never the order blocks are written.
+
+use rayon::prelude::*;
+use std::io::{self, Write};
+
+/// Target size of one encoded block. Blocks are written with one `write_all` each, so the
+/// writer sees a few large writes instead of one per field.
+pub(super) const BLOCK_BYTES: usize = 1 << 20;
+
+/// How many records of about `record_bytes` bytes fill one block.
+pub(super) fn records_per_block(record_bytes: usize) -> usize {
+    (BLOCK_BYTES / record_bytes.max(1)).max(1)
+}
+
+/// Encodes `items` with `encode` and writes the result to `out`, in order.
+///
+/// Items are cut into blocks of `per_block`; a batch of blocks is encoded in parallel on the
+/// rayon pool into reusable buffers while the calling thread writes the previous batch. Two
+/// batches of buffers are alive at a time, so memory stays at a few MiB whatever the mesh size,
+/// and no allocation happens per record once the buffers have grown to their working size.
+pub(super) fn write_encoded<T, F>(
+    out: &mut dyn Write,
+    items: &[T],
+    per_block: usize,
+    encode: F,
+) -> io::Result<()>
+where
+    T: Sync,
+    F: Fn(&mut Vec<u8>, &T) + Sync,
+{
+    let per_block = per_block.max(1);
+    // Two blocks per thread keeps every thread busy even when blocks encode at uneven speed.
+    let blocks_per_batch = 2 * rayon::current_num_threads().max(1);
+    let mut batches = items.chunks(per_block * blocks_per_batch);
+    let Some(first) = batches.next() else {
+        return Ok(());
+    };
+
+    let encode_batch = |bufs: &mut [Vec<u8>], batch: &[T]| {
+        bufs.par_iter_mut()
+            .zip(batch.par_chunks(per_block))
+            .for_each(|(buf, chunk)| {
+                buf.clear();
+                for item in chunk {
+                    encode(buf, item);
+                }
+            });
+    };
+    let blocks_in = |batch: &[T]| batch.len().div_ceil(per_block);
+
+    let mut ready: Vec<Vec<u8>> = (0..blocks_per_batch).map(|_| Vec::new()).collect();
+    let mut spare: Vec<Vec<u8>> = (0..blocks_per_batch).map(|_| Vec::new()).collect();
+    encode_batch(&mut ready, first);
+    let mut ready_blocks = blocks_in(first);
+
+    loop {
+        let next = batches.next();
+        // `in_place_scope` runs the closure on this thread, so `out` (which need not be `Send`)
+        // is only ever touched here, while the spawned job encodes the next batch.
+        let written = rayon::in_place_scope(|scope| {
+            if let Some(batch) = next {
+                let spare = &mut spare;
+                let encode_batch = &encode_batch;
+                scope.spawn(move |_| encode_batch(spare, batch));
+            }
+            ready[..ready_blocks]
+                .iter()
+                .try_for_each(|buf| out.write_all(buf))
+        });
+        written?;
+        match next {
+            None => return Ok(()),
+            Some(batch) => {
+                std::mem::swap(&mut ready, &mut spare);
+                ready_blocks = blocks_in(batch);
+            }
+        }
+    }
+}
+
+/// Appends `v` in decimal.
+#[inline]
+pub(super) fn push_uint(buf: &mut Vec<u8>, mut v: u64) {
+    let mut digits = [0u8; 20];
+    let mut start = digits.len();
+    loop {
+        start -= 1;
+        digits[start] = b'0' + (v % 10) as u8;
+        v /= 10;
+        if v == 0 {
+            break;
+        }
+    }
+    buf.extend_from_slice(&digits[start..]);
+}
+
+/// Appends `v` with the shortest decimal that parses back to the same `f32`.
+///
+/// Plain notation in the usual range, exponent notation for very small or very large
+/// magnitudes (where plain notation would spell out dozens of zeros). Both are the shortest
+/// round-trip digits, so a text file holds exactly the values of the binary one.
+#[inline]
+pub(super) fn push_f32(buf: &mut Vec<u8>, v: f32) {
+    let magnitude = v.abs();
+    // Writing into a Vec cannot fail, so the fmt::Result carries no information.
+    let _ = if magnitude == 0.0 || (1e-5..1e16).contains(&magnitude) {
+        write!(buf, "{v}")
+    } else {
+        write!(buf, "{v:e}")
+    };
+}
+
+/// Appends `x y z` (no line end).
+#[inline]
+pub(super) fn push_point(buf: &mut Vec<u8>, p: &[f32; 3]) {
+    push_f32(buf, p[0]);
+    buf.push(b' ');
+    push_f32(buf, p[1]);
+    buf.push(b' ');
+    push_f32(buf, p[2]);
+}
+
+/// Appends `a b c` (no line end), each index plus `base`.
+#[inline]
+pub(super) fn push_indices(buf: &mut Vec<u8>, tri: &[u32; 3], base: u64) {
+    push_uint(buf, u64::from(tri[0]) + base);
+    buf.push(b' ');
+    push_uint(buf, u64::from(tri[1]) + base);
+    buf.push(b' ');
+    push_uint(buf, u64::from(tri[2]) + base);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uint_digits() {
+        for v in [0u64, 7, 10, 99, 100, 4_294_967_295, u64::MAX] {
+            let mut buf = Vec::new();
+            push_uint(&mut buf, v);
+            assert_eq!(buf, v.to_string().into_bytes());
+        }
+    }
+
+    #[test]
+    fn f32_text_round_trips_bit_exactly() {
+        let samples = [
+            0.0f32,
+            -0.0,
+            1.0,
+            -1.5,
+            0.1,
+            1.0 / 3.0,
+            1e-5,
+            9.99e-6,
+            1.2e-38,
+            f32::MIN_POSITIVE / 8.0,
+            1e16,
+            3.4e38,
+            f32::MAX,
+            -f32::MAX,
+            123456.79,
+        ];
+        for v in samples {
+            let mut buf = Vec::new();
+            push_f32(&mut buf, v);
+            let text = String::from_utf8(buf).expect("ascii");
+            let back: f32 = text.parse().expect("parses");
+            assert_eq!(back.to_bits(), v.to_bits(), "{v} printed as {text}");
+            assert!(text.len() <= 16, "{v} printed as {text}");
+        }
+    }
+
+    #[test]
+    fn blocks_are_written_in_order() {
+        let items: Vec<u32> = (0..100_003).collect();
+        let mut out = Vec::new();
+        write_encoded(&mut out, &items, 7, |buf, &v| {
+            buf.extend_from_slice(&v.to_le_bytes())
+        })
+        .expect("vec write");
+        let expected: Vec<u8> = items.iter().flat_map(|v| v.to_le_bytes()).collect();
+        assert_eq!(out, expected);
+    }
+}
