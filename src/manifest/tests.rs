@@ -966,7 +966,7 @@ ascii = true
 path = "sub/part-1"
 "#;
     let manifest = parse_ok(text, &[]);
-    assert_eq!(manifest.out_dir, PathBuf::from("./meshes"));
+    assert_eq!(manifest.out_dir, PathBuf::from("meshes"));
     assert_eq!(
         manifest.cells["wavy"].source,
         CellSource::Expr("cos(x) + cos(y) + cos(z)".into())
@@ -1084,7 +1084,7 @@ fn set_replaces_values_and_creates_keys_and_tables() {
             "outputs.h.voxel=0.5",
         ],
     );
-    assert_eq!(manifest.out_dir, PathBuf::from("./build dir"));
+    assert_eq!(manifest.out_dir, PathBuf::from("build dir"));
     assert_eq!(
         manifest.cells["gyroid"].source,
         CellSource::Tpms("d".into())
