@@ -328,11 +328,11 @@ impl<'a> Builder<'a> {
             return Ok(());
         }
         let key = self.resolved[&id].key;
-        if let Lookup::Hit { payload, .. } = self.cache.get(&key)? {
-            if let Ok(value) = decode(&self.graph.nodes[id].stage, payload) {
-                self.resolved.get_mut(&id).expect("resolved").value = Some(value);
-                return Ok(());
-            }
+        if let Lookup::Hit { payload, .. } = self.cache.get(&key)?
+            && let Ok(value) = decode(&self.graph.nodes[id].stage, payload)
+        {
+            self.resolved.get_mut(&id).expect("resolved").value = Some(value);
+            return Ok(());
         }
         // The entry went bad between lookup and load: run the node again (deterministic, so
         // its hash and everything keyed on it stay the same).
@@ -403,10 +403,10 @@ impl<'a> Builder<'a> {
     fn collect_garbage(&self, needed: &[NodeId]) -> Result<(), BuildError> {
         let mut keep: HashSet<Key> = needed.iter().map(|id| self.resolved[id].key).collect();
         for (id, node) in self.graph.nodes.iter().enumerate() {
-            if !self.resolved.contains_key(&id) {
-                if let Some(record) = self.cache.previous(&node.name) {
-                    keep.insert(record.key);
-                }
+            if !self.resolved.contains_key(&id)
+                && let Some(record) = self.cache.previous(&node.name)
+            {
+                keep.insert(record.key);
             }
         }
         self.cache.gc(&keep)?;

@@ -3,6 +3,7 @@
 //!   output (counts, validity, bbox, volume and area at fixed precision) must equal
 //!   `summary.txt`.
 //! - `err/NNNN_name/lattice.toml` must fail with exit code 2 and print exactly `expected.txt`.
+//!
 //! An optional `args` file adds command-line arguments, one per line.
 //! `cargo xtask golden --bless` (or `LATTICEBUILD_BLESS=1`) rewrites the expectations.
 

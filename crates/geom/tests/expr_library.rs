@@ -360,7 +360,7 @@ mod expr {
 /// whole plane, bit for bit, for both the separable and the pointwise paths.
 #[test]
 fn row_blocks_equal_whole_planes() {
-    use latticebuild_geom::field::{Grid, PlaneSampler, ScalarField};
+    use latticebuild_geom::field::{Grid, ScalarField};
     let grid = Grid::spanning([-0.3, 0.1, 0.0], [1.2, 0.9, 0.7], [23, 17, 5]);
     for text in [
         latticebuild_geom::tpms::LIBRARY[0].formula,
