@@ -196,3 +196,25 @@ fn graph_marks_cached_and_stale_nodes() {
         "{contour}"
     );
 }
+
+#[test]
+fn concurrent_builds_on_one_cache_both_succeed_with_identical_files() {
+    let p = Project::new(MANIFEST);
+    let spawn = || {
+        std::process::Command::new(common::BIN)
+            .args(["build", "lattice.toml", "-q"])
+            .current_dir(p.path())
+            .spawn()
+            .expect("spawn build")
+    };
+    let (mut a, mut b) = (spawn(), spawn());
+    assert!(a.wait().expect("wait a").success());
+    assert!(b.wait().expect("wait b").success());
+    let first = outputs(&p);
+    // Whatever interleaving happened, the cache is sound: a rebuild runs nothing and the
+    // files equal a fresh build's.
+    assert!(ran(&p.build(&[])).is_empty());
+    let fresh = Project::new(MANIFEST);
+    fresh.build(&[]);
+    assert_eq!(outputs(&fresh), first);
+}
