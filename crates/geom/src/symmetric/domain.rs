@@ -26,7 +26,7 @@ use crate::field::{Grid, PlaneSampler, ScalarField};
 /// wrapped by [`from_fn`].
 pub trait Source: Sync {
     /// Values at the Cartesian points `(xs[i], ys[i], zs[i])`.
-    fn eval_points(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]);
+    fn sample_points(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]);
 
     /// A fast sampler for a regular Cartesian grid, if the source has one.
     fn grid_sampler<'a>(&'a self, _grid: &Grid) -> Option<Box<dyn PlaneSampler + 'a>> {
@@ -35,7 +35,7 @@ pub trait Source: Sync {
 }
 
 impl<T: ScalarField + ?Sized> Source for T {
-    fn eval_points(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
+    fn sample_points(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
         ScalarField::eval_points(self, xs, ys, zs, out);
     }
 
@@ -54,7 +54,7 @@ pub fn from_fn<F: Fn([f64; 3]) -> f64 + Sync>(f: F) -> FnSource<F> {
 }
 
 impl<F: Fn([f64; 3]) -> f64 + Sync> Source for FnSource<F> {
-    fn eval_points(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
+    fn sample_points(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
         for (i, o) in out.iter_mut().enumerate() {
             *o = (self.0)([xs[i], ys[i], zs[i]]);
         }
@@ -262,7 +262,7 @@ impl<'a> PlaneSource<'a> {
     /// The source (or its symmetrization) at Cartesian points.
     fn evaluate(&self, pts: &Points, out: &mut [f64]) {
         if !self.options.symmetrize {
-            self.source.eval_points(&pts.x, &pts.y, &pts.z, out);
+            self.source.sample_points(&pts.x, &pts.y, &pts.z, out);
             return;
         }
         out.fill(f64::INFINITY);
@@ -275,7 +275,7 @@ impl<'a> PlaneSource<'a> {
                 let s = frame.from_cartesian([pts.x[p], pts.y[p], pts.z[p]]);
                 img.push(frame.to_cartesian(mat_vec_f64(q, s)));
             }
-            self.source.eval_points(&img.x, &img.y, &img.z, &mut vals);
+            self.source.sample_points(&img.x, &img.y, &img.z, &mut vals);
             for (o, &v) in out.iter_mut().zip(&vals) {
                 // NaN propagates so that a bad source is reported, not hidden by `min`.
                 *o = if v.is_nan() || o.is_nan() {

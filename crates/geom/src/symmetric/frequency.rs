@@ -105,11 +105,10 @@ impl Group {
                 }
             }
             None => {
-                // Any group: scan the box. A representative is the largest member of its
-                // orbit, so its first component is non-negative.
+                // Any group: scan the box.
                 let d = self.dimension();
                 let zr = if d == 3 { h } else { 0 };
-                out = (0..=h)
+                out = (-h..=h)
                     .into_par_iter()
                     .flat_map_iter(|a| {
                         (-h..=h).flat_map(move |b| (-zr..=zr).map(move |c| [a, b, c]))
