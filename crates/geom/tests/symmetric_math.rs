@@ -119,7 +119,12 @@ mod symmetric {
 
     /// A random real trigonometric polynomial in frame coordinates, with frequencies
     /// |k_i| ≤ kmax, as (k, amplitude, phase) triples.
-    fn random_poly(rng: &mut Rng, dim: usize, terms: usize, kmax: i32) -> Vec<([i32; 3], f64, f64)> {
+    fn random_poly(
+        rng: &mut Rng,
+        dim: usize,
+        terms: usize,
+        kmax: i32,
+    ) -> Vec<([i32; 3], f64, f64)> {
         (0..terms)
             .map(|_| {
                 let k = [
@@ -266,7 +271,10 @@ mod symmetric {
             let lib = r.vertices();
             assert_eq!(lib.len(), verts.len());
             for v in &verts {
-                assert!(lib.iter().any(|w| (0..3).all(|a| (v[a] - w[a]).abs() < 1e-12)));
+                assert!(
+                    lib.iter()
+                        .any(|w| (0..3).all(|a| (v[a] - w[a]).abs() < 1e-12))
+                );
             }
             for m in g.elements() {
                 let q = cartesian(&g, m);
@@ -291,7 +299,8 @@ mod symmetric {
                 let q = m.map(|r| r.map(f64::from));
                 tet.iter().all(|v| {
                     let w = apply_f(&q, *v);
-                    tet.iter().any(|u| (0..3).all(|a| (u[a] - w[a]).abs() < 1e-12))
+                    tet.iter()
+                        .any(|u| (0..3).all(|a| (u[a] - w[a]).abs() < 1e-12))
                 })
             })
             .count();
@@ -309,10 +318,16 @@ mod symmetric {
         let c3 = [[0, 0, 1], [1, 0, 0], [0, 1, 0]];
         let c4 = [[0, -1, 0], [1, 0, 0], [0, 0, 1]];
         let inv = [[-1, 0, 0], [0, -1, 0], [0, 0, -1]];
-        assert_eq!(Group::from_generators(3, &[c3, c4, inv]).expect("Oh"), Group::oh());
+        assert_eq!(
+            Group::from_generators(3, &[c3, c4, inv]).expect("Oh"),
+            Group::oh()
+        );
         let swap = [[0, 1, 0], [1, 0, 0], [0, 0, 1]];
         let c2 = [[1, 0, 0], [0, -1, 0], [0, 0, -1]];
-        assert_eq!(Group::from_generators(3, &[c3, swap, c2]).expect("Td"), Group::td());
+        assert_eq!(
+            Group::from_generators(3, &[c3, swap, c2]).expect("Td"),
+            Group::td()
+        );
         // A cyclic group and a hexagonal group (C6 in skew coordinates: 60° rotation).
         assert_eq!(Group::from_generators(2, &[rot]).expect("C4").order(), 4);
         let c6 = [[0, -1, 0], [1, 1, 0], [0, 0, 1]];
@@ -323,8 +338,14 @@ mod symmetric {
 
     #[test]
     fn symmetric_group_bad_input() {
-        assert!(matches!(Group::by_name("D5"), Err(GroupError::UnknownName(_))));
-        assert!(matches!(Group::by_name(""), Err(GroupError::UnknownName(_))));
+        assert!(matches!(
+            Group::by_name("D5"),
+            Err(GroupError::UnknownName(_))
+        ));
+        assert!(matches!(
+            Group::by_name(""),
+            Err(GroupError::UnknownName(_))
+        ));
         assert_eq!(Group::by_name("oh").expect("case-insensitive"), Group::oh());
         assert_eq!(Group::by_name("D3").expect("D3"), Group::d3());
         let shear = [[1, 1, 0], [0, 1, 0], [0, 0, 1]];
@@ -428,7 +449,9 @@ mod symmetric {
             // Cubic groups: the band is max|f_i| ≤ N/2 − 1, so all such vectors are present.
             let expected = match g.name() {
                 "Oh" => (0..=5).map(|a| (a + 1) * (a + 2) / 2).sum::<i32>() as usize,
-                "Td" => (0..=5).map(|a: i32| (0..=a).map(|b| 2 * b + 1).sum::<i32>()).sum::<i32>() as usize,
+                "Td" => (0..=5)
+                    .map(|a: i32| (0..=a).map(|b| 2 * b + 1).sum::<i32>())
+                    .sum::<i32>() as usize,
                 "D4" => 21,
                 _ => set.len(),
             };
@@ -486,7 +509,11 @@ mod symmetric {
                 .map(|i| {
                     let idx = [i % n, (i / n) % n, i / (n * n)];
                     std::array::from_fn(|a| {
-                        if a < d { origin[a] + idx[a] as f64 / n as f64 } else { 0.0 }
+                        if a < d {
+                            origin[a] + idx[a] as f64 / n as f64
+                        } else {
+                            0.0
+                        }
                     })
                 })
                 .collect();
@@ -636,14 +663,20 @@ mod symmetric {
         // A ball off the centre; symmetrized, every image of its centre is inside.
         let g = Group::d4();
         let c = [0.2, 0.1, 0.0];
-        let input = move |x: [f64; 3]| ((x[0] - c[0]).powi(2) + (x[1] - c[1]).powi(2)).sqrt() - 0.08;
+        let input =
+            move |x: [f64; 3]| ((x[0] - c[0]).powi(2) + (x[1] - c[1]).powi(2)).sqrt() - 0.08;
         let opts = SampleOptions {
             extend: Extend::Mirror,
             symmetrize: true,
         };
         let n = 20;
         let s = sample(&g, n, &from_fn(input), opts).expect("sample");
-        for (img, expect) in [([0.2, 0.1], true), ([-0.1, 0.2], true), ([0.1, -0.2], true), ([0.0, 0.0], false)] {
+        for (img, expect) in [
+            ([0.2, 0.1], true),
+            ([-0.1, 0.2], true),
+            ([0.1, -0.2], true),
+            ([0.0, 0.0], false),
+        ] {
             let i = ((img[0] + 0.5) * n as f64).round() as usize;
             let j = ((img[1] + 0.5) * n as f64).round() as usize;
             assert_eq!(s[i + n * j] < 0.0, expect, "{img:?}");
@@ -686,7 +719,10 @@ mod symmetric {
         )
         .expect("sample");
         let (edge_plain, _) = jump(&plain);
-        assert!(edge_plain > 5.0 * inner, "the unmirrored domain should jump: {edge_plain} vs {inner}");
+        assert!(
+            edge_plain > 5.0 * inner,
+            "the unmirrored domain should jump: {edge_plain} vs {inner}"
+        );
 
         // Each triangle edge becomes a mirror line of the fitted cell: the mirror across
         // s1 + s2 = ⅓ is (s1, s2) ↦ (⅓ − s2, ⅓ − s1).
@@ -708,7 +744,12 @@ mod symmetric {
         let n = 8;
         let probe = |x: [f64; 3]| x[0] + 10.0 * x[1] + 100.0 * x[2];
         let s = sample(&g, n, &from_fn(probe), SampleOptions::default()).expect("sample");
-        let normals = [[1.0, 1.0, 1.0], [-1.0, -1.0, 1.0], [1.0, -1.0, -1.0], [-1.0, 1.0, -1.0]];
+        let normals = [
+            [1.0, 1.0, 1.0],
+            [-1.0, -1.0, 1.0],
+            [1.0, -1.0, -1.0],
+            [-1.0, 1.0, -1.0],
+        ];
         for k in 0..n {
             for j in 0..n {
                 for i in 0..n {
@@ -748,9 +789,17 @@ mod symmetric {
                 for (i, &v) in grid.iter().enumerate().step_by(3) {
                     let idx = [i % m, (i / m) % m, i / (m * m)];
                     let s: [f64; 3] = std::array::from_fn(|a| {
-                        if a < d { origin[a] + idx[a] as f64 / m as f64 } else { 0.0 }
+                        if a < d {
+                            origin[a] + idx[a] as f64 / m as f64
+                        } else {
+                            0.0
+                        }
                     });
-                    let x = if g.frame() == Frame::Hexagonal { skew_to_cart(s) } else { s };
+                    let x = if g.frame() == Frame::Hexagonal {
+                        skew_to_cart(s)
+                    } else {
+                        s
+                    };
                     worst = worst.max((cell.value(x) - v).abs());
                 }
                 assert!(worst <= 1e-10, "{} m={m}: {worst:e}", g.name());
@@ -819,7 +868,8 @@ mod symmetric {
     #[test]
     fn symmetric_fit_from_expression_field() {
         // A ScalarField source (the expression compiler's separable sampler path).
-        let expr = latticebuild_geom::expr::compile("sin(tau*x)*sin(tau*y)*sin(tau*z)").expect("expr");
+        let expr =
+            latticebuild_geom::expr::compile("sin(tau*x)*sin(tau*y)*sin(tau*z)").expect("expr");
         let direct = |x: [f64; 3]| (TAU * x[0]).sin() * (TAU * x[1]).sin() * (TAU * x[2]).sin();
         for extend in [Extend::None] {
             let opts = FitOptions {
@@ -838,7 +888,8 @@ mod symmetric {
         }
         // Mirrored Td samples from the field agree with mirrored samples from a closure.
         let a = sample(&Group::td(), 8, &expr, SampleOptions::default()).expect("sample");
-        let b = sample(&Group::td(), 8, &from_fn(direct), SampleOptions::default()).expect("sample");
+        let b =
+            sample(&Group::td(), 8, &from_fn(direct), SampleOptions::default()).expect("sample");
         for (u, v) in a.iter().zip(&b) {
             assert!((u - v).abs() < 1e-12);
         }
@@ -854,8 +905,12 @@ mod symmetric {
             let d = g.dimension();
             let p1 = random_poly(&mut rng, d, 3, 5);
             let p2 = random_poly(&mut rng, d, 3, 5);
-            let g1 = move |x: [f64; 3]| (x[0] * x[0] + x[1] * x[1]).sqrt() - 0.2 + 0.1 * eval_poly(&p1, x);
-            let g2 = move |x: [f64; 3]| x[0].abs() + x[1].abs() + x[2].abs() - 0.4 + 0.1 * eval_poly(&p2, x);
+            let g1 = move |x: [f64; 3]| {
+                (x[0] * x[0] + x[1] * x[1]).sqrt() - 0.2 + 0.1 * eval_poly(&p1, x)
+            };
+            let g2 = move |x: [f64; 3]| {
+                x[0].abs() + x[1].abs() + x[2].abs() - 0.4 + 0.1 * eval_poly(&p2, x)
+            };
             let opts = FitOptions::default();
             let n = if d == 3 { 16 } else { 32 };
             let a = fit(&g, n, &from_fn(&g1), &opts).expect("a");
@@ -911,8 +966,14 @@ mod symmetric {
         let n = 48;
         let step = 1.0 / n as f64;
         let g = Group::oh();
-        let ball = |r: f64| move |x: [f64; 3]| {
-            if x[0] * x[0] + x[1] * x[1] + x[2] * x[2] <= r * r { -1.0 } else { 1.0 }
+        let ball = |r: f64| {
+            move |x: [f64; 3]| {
+                if x[0] * x[0] + x[1] * x[1] + x[2] * x[2] <= r * r {
+                    -1.0
+                } else {
+                    1.0
+                }
+            }
         };
         let opts = FitOptions::default();
         let a = fit(&g, n, &from_fn(ball(0.12)), &opts).expect("a");
@@ -921,7 +982,11 @@ mod symmetric {
         let mut rng = Rng(4);
         let mut worst: f64 = 0.0;
         for _ in 0..40 {
-            let mut u = [rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)];
+            let mut u = [
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            ];
             let l = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt();
             u = u.map(|c| c / l);
             worst = worst.max((radius(&sum, u) - 0.32).abs());
@@ -931,7 +996,11 @@ mod symmetric {
         let diff = minkowski_difference(&sum, &b, n).expect("difference");
         let mut worst: f64 = 0.0;
         for _ in 0..40 {
-            let mut u = [rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)];
+            let mut u = [
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            ];
             let l = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt();
             u = u.map(|c| c / l);
             worst = worst.max((radius(&diff, u) - 0.12).abs());
@@ -946,10 +1015,16 @@ mod symmetric {
         let g = Group::d3();
         let n = 64;
         // B: the triangle scaled by 0.3 (pointing to +y), as an indicator.
-        let tri = |scale: f64| move |x: [f64; 3]| {
-            let s = cart_to_skew(x);
-            let t = scale / 3.0;
-            if s[0] >= -t && s[1] >= -t && s[0] + s[1] <= t { -1.0 } else { 1.0 }
+        let tri = |scale: f64| {
+            move |x: [f64; 3]| {
+                let s = cart_to_skew(x);
+                let t = scale / 3.0;
+                if s[0] >= -t && s[1] >= -t && s[0] + s[1] <= t {
+                    -1.0
+                } else {
+                    1.0
+                }
+            }
         };
         let opts = FitOptions::default();
         let small = fit(&g, n, &from_fn(tri(0.3)), &opts).expect("small");
@@ -973,14 +1048,28 @@ mod symmetric {
         let ball = |x: [f64; 3]| (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt() - 0.3;
         let g = Group::oh();
         let opts = FitOptions::default();
-        assert_eq!(fit(&g, 15, &from_fn(ball), &opts).unwrap_err(), FitError::Odd(15));
-        assert_eq!(fit(&g, 2, &from_fn(ball), &opts).unwrap_err(), FitError::TooSmall(2));
-        assert_eq!(fit(&g, 0, &from_fn(ball), &opts).unwrap_err(), FitError::TooSmall(0));
-        assert!(matches!(fit(&g, 1 << 20, &from_fn(ball), &opts), Err(FitError::TooLarge { .. })));
+        assert_eq!(
+            fit(&g, 15, &from_fn(ball), &opts).unwrap_err(),
+            FitError::Odd(15)
+        );
+        assert_eq!(
+            fit(&g, 2, &from_fn(ball), &opts).unwrap_err(),
+            FitError::TooSmall(2)
+        );
+        assert_eq!(
+            fit(&g, 0, &from_fn(ball), &opts).unwrap_err(),
+            FitError::TooSmall(0)
+        );
+        assert!(matches!(
+            fit(&g, 1 << 20, &from_fn(ball), &opts),
+            Err(FitError::TooLarge { .. })
+        ));
         // No surface in the input.
         assert_eq!(
             fit(&g, 8, &from_fn(|_| 1.0), &opts).unwrap_err(),
-            FitError::EmptyInput { side: Side::Outside }
+            FitError::EmptyInput {
+                side: Side::Outside
+            }
         );
         assert_eq!(
             fit(&g, 8, &from_fn(|_| -1.0), &opts).unwrap_err(),
@@ -995,11 +1084,16 @@ mod symmetric {
         let shifted = |x: [f64; 3]| 0.5 + (TAU * x[0]).sin();
         assert_eq!(
             fit(&g, 8, &from_fn(shifted), &opts).unwrap_err(),
-            FitError::Vanishes { side: Side::Outside }
+            FitError::Vanishes {
+                side: Side::Outside
+            }
         );
         // Non-finite samples are reported with the point.
         let bad = |x: [f64; 3]| if x[0] > 0.2 { f64::NAN } else { x[0] };
-        assert!(matches!(fit(&g, 8, &from_fn(bad), &opts), Err(FitError::NonFinite { .. })));
+        assert!(matches!(
+            fit(&g, 8, &from_fn(bad), &opts),
+            Err(FitError::NonFinite { .. })
+        ));
         let sym = SampleOptions {
             extend: Extend::Mirror,
             symmetrize: true,
@@ -1014,7 +1108,11 @@ mod symmetric {
         assert!(minkowski_sum(&cell, &cell, 3).is_err());
         // Messages name the problem.
         assert!(FitError::Odd(15).to_string().contains("odd"));
-        assert!(FitError::Vanishes { side: Side::Zero }.to_string().contains("vanishes"));
+        assert!(
+            FitError::Vanishes { side: Side::Zero }
+                .to_string()
+                .contains("vanishes")
+        );
         // Explicit coefficients are checked.
         use latticebuild_geom::symmetric::FittedCell;
         assert!(matches!(
@@ -1028,12 +1126,16 @@ mod symmetric {
         let ok = FittedCell::from_coefficients(
             Group::oh(),
             8,
-            [([1, 0, 0], Complex64::new(1.0, 0.0)), ([0, 0, 0], Complex64::new(0.5, 0.0))],
+            [
+                ([1, 0, 0], Complex64::new(1.0, 0.0)),
+                ([0, 0, 0], Complex64::new(0.5, 0.0)),
+            ],
         )
         .expect("valid");
         // φ_(1,0,0) = (2/√6)(cos 2πx + cos 2πy + cos 2πz) for Oh: K = 1/√(48·8).
         let x = [0.1, 0.2, 0.3];
-        let expect = 0.5 + 16.0 / (48.0f64 * 8.0).sqrt() * x.iter().map(|c| (TAU * c).cos()).sum::<f64>();
+        let expect =
+            0.5 + 16.0 / (48.0f64 * 8.0).sqrt() * x.iter().map(|c| (TAU * c).cos()).sum::<f64>();
         assert!((ok.value(x) - expect).abs() < 1e-12);
     }
 

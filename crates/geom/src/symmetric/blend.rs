@@ -103,7 +103,13 @@ fn convolve(
     let threshold = 0.5 / (n as f64).powi(d as i32);
     let samples: Vec<f64> = h
         .into_iter()
-        .map(|v| if (v > threshold) != complement { -1.0 } else { 1.0 })
+        .map(|v| {
+            if (v > threshold) != complement {
+                -1.0
+            } else {
+                1.0
+            }
+        })
         .collect();
     fit_samples(group, n, &samples)
 }

@@ -82,12 +82,51 @@ pub struct SampleOptions {
 
 /// `exp(−2πi k·x_0)` for the domain's lower corner `x_0`, from exact fractions.
 pub(crate) fn origin_phase(domain: Domain, k: [i32; 3]) -> Complex64 {
-    let o = domain.origin_fraction();
-    let mut z = Complex64::new(1.0, 0.0);
-    for a in 0..domain.dimension() {
-        z *= cis_fraction(-(k[a] as i64) * o[a].0, o[a].1);
+    OriginPhase::new(domain).at(k)
+}
+
+/// Table lookup of `exp(−2πi k·x_0)`: per axis, `x_0 = p/q` with `q ≤ 3`, so the factor
+/// depends only on `k_a mod q`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct OriginPhase {
+    den: [i64; 3],
+    table: [[Complex64; 3]; 3],
+    dim: usize,
+}
+
+impl OriginPhase {
+    pub(crate) fn new(domain: Domain) -> OriginPhase {
+        let o = domain.origin_fraction();
+        let mut table = [[Complex64::new(1.0, 0.0); 3]; 3];
+        for a in 0..3 {
+            for (r, t) in table[a].iter_mut().enumerate().take(o[a].1 as usize) {
+                *t = cis_fraction(-(r as i64) * o[a].0, o[a].1);
+            }
+        }
+        OriginPhase {
+            den: o.map(|f| f.1),
+            table,
+            dim: domain.dimension(),
+        }
     }
-    z
+
+    #[inline]
+    pub(crate) fn at(&self, k: [i32; 3]) -> Complex64 {
+        // Constant divisors: no hardware division on this hot path.
+        let r = |a: usize| -> usize {
+            match self.den[a] {
+                1 => 0,
+                2 => (k[a] & 1) as usize,
+                3 => k[a].rem_euclid(3) as usize,
+                q => (k[a] as i64).rem_euclid(q) as usize,
+            }
+        };
+        let mut z = self.table[0][r(0)];
+        for a in 1..self.dim {
+            z *= self.table[a][r(a)];
+        }
+        z
+    }
 }
 
 /// Checks a grid size: even and at least 4, and not absurdly large.
@@ -95,7 +134,7 @@ pub(crate) fn check_n(n: usize, dimension: usize) -> Result<(), FitError> {
     if n < 4 {
         return Err(FitError::TooSmall(n));
     }
-    if n % 2 != 0 {
+    if !n.is_multiple_of(2) {
         return Err(FitError::Odd(n));
     }
     let limit = if dimension == 3 { 1024 } else { 1 << 14 };
@@ -161,7 +200,11 @@ impl<'a> PlaneSource<'a> {
 
     /// Number of planes: `N` in 3D, 1 in 2D.
     pub(crate) fn planes(&self) -> usize {
-        if self.group.dimension() == 3 { self.n } else { 1 }
+        if self.group.dimension() == 3 {
+            self.n
+        } else {
+            1
+        }
     }
 
     /// Domain coordinate of grid index `i` on `axis`.

@@ -17,14 +17,15 @@
 use rustfft::num_complex::Complex64;
 
 use super::basis::cis_turns;
-use super::domain::{check_n, origin_phase};
-use super::fft::Spectrum;
+use super::domain::{OriginPhase, check_n};
+use super::fft::{Spectrum, wrap};
 use super::fit::{FitError, FittedCell};
+use super::frequency::FrequencyIndex;
 use super::group::Frame;
 use crate::field::ScalarField;
 
 /// Relative bound on what pruning may change in direct evaluation (see the module docs).
-pub const PRUNE_TOLERANCE: f64 = 1e-14;
+pub const PRUNE_TOLERANCE: f64 = 1e-12;
 
 /// The pruned plane-wave expansion, grouped in rows of equal `(ky, kz)` sorted by `kx`.
 #[derive(Clone, Debug)]
@@ -120,8 +121,8 @@ impl Terms {
             w: Vec::new(),
         };
         for (k, w) in list {
-            for a in 0..3 {
-                terms.kmax[a] = terms.kmax[a].max(k[a].unsigned_abs() as usize);
+            for (m, c) in terms.kmax.iter_mut().zip(k) {
+                *m = (*m).max(c.unsigned_abs() as usize);
             }
             if terms.kx.last() == Some(&k[0])
                 && let Some(row) = terms.rows.last()
@@ -220,17 +221,98 @@ impl FittedCell {
     pub fn grid(&self, n: usize) -> Result<Vec<f64>, FitError> {
         let d = self.group.dimension();
         check_n(n, d)?;
-        let domain = self.group.domain();
+        let phase = OriginPhase::new(self.group.domain());
         let mut spectrum = Spectrum::zeros(n, d);
-        for c in &self.coefficients {
-            let w = c.c * (c.k_f * self.group.stabilizer_order(c.f) as f64);
-            for k in self.group.orbit(c.f) {
-                // Re(w·exp(2πi k·(x_0 + i/N))): the corner phase is exp(+2πi k·x_0).
-                let v = w * origin_phase(domain, k).conj() * 0.5;
-                spectrum.add_hermitian(k, v);
-            }
+        if n >= self.n {
+            self.fill_spectrum_by_gather(&mut spectrum, &phase);
+            return Ok(spectrum.inverse());
         }
+        // A coarser grid than the fit's folds frequencies: scatter every term instead.
+        let transposes = self.group.transposes();
+        let coefficients = &self.coefficients;
+        let half = n / 2;
+        let (dim, sn) = (d, spectrum.n);
+        let offset = |kx: usize, kz: usize| kx + (sn / 2 + 1) * kz;
+        let row = spectrum.row_len();
+        // Each task owns a range of ky rows and replays all terms, computing the y-component
+        // first to skip the ones it does not own. Summing over every element (not the
+        // distinct orbit) gives each k its multiplicity m_k = |Stab f|. The term
+        // Re(w·exp(2πi k·(x_0 + i/N))) has corner phase exp(+2πi k·x_0); it is stored as ½ of
+        // it at k and ½ of its conjugate at −k (each where the half-spectrum stores it).
+        spectrum.par_ky_ranges(|lo, hi, block| {
+            let owns = |ky: usize| ky >= lo && ky < hi;
+            for c in coefficients {
+                let w = c.c * (0.5 * c.k_f);
+                let f = c.f;
+                for t in transposes {
+                    let k1 = t[1][0] * f[0] + t[1][1] * f[1] + t[1][2] * f[2];
+                    let (yp, yn) = (wrap(k1, n), wrap(-k1, n));
+                    if !owns(yp) && !owns(yn) {
+                        continue;
+                    }
+                    let k0 = t[0][0] * f[0] + t[0][1] * f[1] + t[0][2] * f[2];
+                    let k2 = t[2][0] * f[0] + t[2][1] * f[1] + t[2][2] * f[2];
+                    let v = w * phase.at([k0, k1, k2]).conj();
+                    let z = |k: i32| if dim == 3 { wrap(k, n) } else { 0 };
+                    let xp = wrap(k0, n);
+                    if owns(yp) && xp <= half {
+                        block[(yp - lo) * row + offset(xp, z(k2))] += v;
+                    }
+                    let xn = wrap(-k0, n);
+                    if owns(yn) && xn <= half {
+                        block[(yn - lo) * row + offset(xn, z(-k2))] += v.conj();
+                    }
+                }
+            }
+        });
         Ok(spectrum.inverse())
+    }
+}
+
+impl FittedCell {
+    /// The half-spectrum of `Φ` on a grid at least as fine as the fit's (no folding): each
+    /// stored bin `k` reads its coefficient, `H(k) = (W_k + conj W_{−k})/2` with
+    /// `W_k = c_f K_f m_k exp(2πi k·x_0)`, `f` the representative of `k`. Writes stream
+    /// through memory; only the small coefficient table is read at random.
+    fn fill_spectrum_by_gather(&self, spectrum: &mut Spectrum, phase: &OriginPhase) {
+        let group = &self.group;
+        let d = group.dimension();
+        let fs: Vec<[i32; 3]> = self.coefficients.iter().map(|c| c.f).collect();
+        // Coefficients are unique in-band representatives, so as many as the full set means
+        // the full set.
+        let index = FrequencyIndex::complete(group, &fs, self.n);
+        let weights: Vec<Complex64> = self
+            .coefficients
+            .iter()
+            .map(|c| c.c * (c.k_f * group.stabilizer_order(c.f) as f64))
+            .collect();
+        // The representative of −k is the partner of k's: one index look-up per bin.
+        let partner: Vec<Option<usize>> = self
+            .coefficients
+            .iter()
+            .map(|c| index.find(group.partner(c.f)))
+            .collect();
+        let half = (spectrum.n / 2) as i32;
+        let zero = Complex64::new(0.0, 0.0);
+        spectrum.par_set_entries(|k| {
+            if (0..d).any(|a| k[a].abs() >= half) {
+                return zero;
+            }
+            match index.find(group.representative_fast(k)) {
+                Some(i) => {
+                    // W_{−k} = w_partner·exp(−2πi k·x_0), so conj(W_{−k}) carries the same
+                    // phase exp(+2πi k·x_0) as W_k.
+                    let wm = partner[i].map_or(zero, |j| weights[j].conj());
+                    (weights[i] + wm) * phase.at(k).conj() * 0.5
+                }
+                // No coefficient for k's orbit (explicit coefficient sets may hold f without
+                // its partner): only −k's term remains.
+                None => match index.find(group.representative_fast([-k[0], -k[1], -k[2]])) {
+                    Some(j) => weights[j].conj() * phase.at(k).conj() * 0.5,
+                    None => zero,
+                },
+            }
+        });
     }
 }
 

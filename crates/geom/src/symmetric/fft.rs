@@ -28,6 +28,24 @@ use super::fit::FitError;
 
 const ZERO: Complex64 = Complex64::new(0.0, 0.0);
 
+/// `v mod n` in `[0, n)`, without a division in the usual case `|v| < n`.
+#[inline]
+pub(crate) fn wrap(v: i32, n: usize) -> usize {
+    let n = n as i64;
+    let v = v as i64;
+    let r = if v >= 0 && v < n {
+        v
+    } else if v < 0 && v >= -n {
+        v + n
+    } else {
+        v.rem_euclid(n)
+    };
+    r as usize
+}
+
+/// Produces the real samples of plane `z` (`N²`, x fastest).
+type PlaneFn<'a> = dyn Fn(usize, &mut [f64]) -> Result<(), FitError> + Sync + 'a;
+
 /// The DFT of a real `N^d` grid, half-spectrum along x.
 #[derive(Clone, Debug)]
 pub(crate) struct Spectrum {
@@ -69,7 +87,10 @@ struct Work {
 impl Work {
     fn new(n: usize, p: &Plans) -> Work {
         let h = n / 2 + 1;
-        let clen = p.fwd.get_inplace_scratch_len().max(p.inv.get_inplace_scratch_len());
+        let clen = p
+            .fwd
+            .get_inplace_scratch_len()
+            .max(p.inv.get_inplace_scratch_len());
         let rlen = p.r2c.get_scratch_len().max(p.c2r.get_scratch_len());
         Work {
             real: vec![0.0; n * n],
@@ -180,7 +201,7 @@ impl Spectrum {
     fn forward_with(
         n: usize,
         dim: usize,
-        plane: &(dyn Fn(usize, &mut [f64]) -> Result<(), FitError> + Sync),
+        plane: &PlaneFn<'_>,
     ) -> Result<(Spectrum, Range), FitError> {
         let h = n / 2 + 1;
         let plans = Plans::new(n);
@@ -245,50 +266,92 @@ impl Spectrum {
         }
     }
 
-    /// Storage index of `(kx, ky, kz)`, each already reduced to `[0, N)` and `kx ≤ N/2`.
+    /// Runs `fill(lo, hi, block)` in parallel over disjoint ranges `lo..hi` of `ky`, each
+    /// with the storage of those rows (`kx + H·kz` within a row of `ky`, rows of
+    /// [`row_len`](Self::row_len)). Lets a filler write without locks.
+    pub(crate) fn par_ky_ranges(&mut self, fill: impl Fn(usize, usize, &mut [Complex64]) + Sync) {
+        let n = self.n;
+        let row = self.row_len();
+        let tasks = rayon::current_num_threads().clamp(1, n);
+        let per = n.div_ceil(tasks);
+        self.data
+            .par_chunks_mut(row * per)
+            .enumerate()
+            .for_each(|(t, chunk)| {
+                let lo = t * per;
+                fill(lo, lo + chunk.len() / row, chunk);
+            });
+    }
+
+    /// Calls `visit(k, value)` for every stored entry, `k` taken in `(−N/2, N/2]` per axis,
+    /// in parallel over ranges of `ky`; each task folds into its own accumulator made by
+    /// `init`, and the accumulators are returned.
+    pub(crate) fn par_fold_entries<A: Send>(
+        &self,
+        init: impl Fn() -> A + Sync,
+        visit: impl Fn(&mut A, [i32; 3], Complex64) + Sync,
+    ) -> Vec<A> {
+        let n = self.n;
+        let h = n / 2 + 1;
+        let row = self.row_len();
+        let dim = self.dim;
+        let signed = |i: usize| {
+            if i > n / 2 {
+                i as i32 - n as i32
+            } else {
+                i as i32
+            }
+        };
+        let tasks = (2 * rayon::current_num_threads()).clamp(1, n);
+        let per = n.div_ceil(tasks);
+        self.data
+            .par_chunks(row * per)
+            .enumerate()
+            .map(|(t, chunk)| {
+                let mut acc = init();
+                for (r, entries) in chunk.chunks_exact(row).enumerate() {
+                    let ky = signed(t * per + r);
+                    for (i, &v) in entries.iter().enumerate() {
+                        let kz = if dim == 3 { signed(i / h) } else { 0 };
+                        visit(&mut acc, [(i % h) as i32, ky, kz], v);
+                    }
+                }
+                acc
+            })
+            .collect()
+    }
+
+    /// Sets every stored entry to `value(k)`, `k` taken in `(−N/2, N/2]` per axis, in
+    /// parallel over rows of `ky`.
+    pub(crate) fn par_set_entries(&mut self, value: impl Fn([i32; 3]) -> Complex64 + Sync) {
+        let n = self.n;
+        let h = n / 2 + 1;
+        let row = self.row_len();
+        let dim = self.dim;
+        let signed = |i: usize| {
+            if i > n / 2 {
+                i as i32 - n as i32
+            } else {
+                i as i32
+            }
+        };
+        self.data
+            .par_chunks_mut(row)
+            .enumerate()
+            .for_each(|(ky, entries)| {
+                let ky = signed(ky);
+                for (i, v) in entries.iter_mut().enumerate() {
+                    let kz = if dim == 3 { signed(i / h) } else { 0 };
+                    *v = value([(i % h) as i32, ky, kz]);
+                }
+            });
+    }
+
+    /// Length of the storage of one `ky`.
     #[inline]
-    fn index(&self, kx: usize, ky: usize, kz: usize) -> usize {
+    pub(crate) fn row_len(&self) -> usize {
         let h = self.n / 2 + 1;
-        if self.dim == 3 {
-            kx + h * (kz + self.n * ky)
-        } else {
-            kx + h * ky
-        }
-    }
-
-    /// The DFT value at integer frequency `k` (mod N on each axis). Where the x-index falls in
-    /// the unstored half, it is read as the conjugate of the value at `−k`.
-    #[inline]
-    pub(crate) fn raw(&self, k: [i32; 3]) -> Complex64 {
-        let n = self.n as i64;
-        let m = |v: i32| (v as i64).rem_euclid(n) as usize;
-        let kx = m(k[0]);
-        let z = |v: i32| if self.dim == 3 { m(v) } else { 0 };
-        if kx <= self.n / 2 {
-            self.data[self.index(kx, m(k[1]), z(k[2]))]
-        } else {
-            self.data[self.index(self.n - kx, m(-k[1]), z(-k[2]))].conj()
-        }
-    }
-
-    /// Adds `v` at `k` and `conj(v)` at `−k` (each where it is stored), so the spectrum stays
-    /// Hermitian: a term `v·e(k·x)` contributes `2·Re(v·e(k·x))` after [`inverse`](Self::inverse).
-    /// Frequencies outside the band fold modulo N, which keeps the values at grid points exact.
-    #[inline]
-    pub(crate) fn add_hermitian(&mut self, k: [i32; 3], v: Complex64) {
-        let n = self.n as i64;
-        let m = |c: i32| (c as i64).rem_euclid(n) as usize;
-        let z = |c: i32| if self.dim == 3 { m(c) } else { 0 };
-        let kx = m(k[0]);
-        if kx <= self.n / 2 {
-            let i = self.index(kx, m(k[1]), z(k[2]));
-            self.data[i] += v;
-        }
-        let nx = m(-k[0]);
-        if nx <= self.n / 2 {
-            let i = self.index(nx, m(-k[1]), z(-k[2]));
-            self.data[i] += v.conj();
-        }
+        if self.dim == 3 { self.n * h } else { h }
     }
 
     /// Multiplies every stored value by `f(k)`, `k` the stored frequency taken in
@@ -297,7 +360,13 @@ impl Spectrum {
     pub(crate) fn map_with_frequency(&mut self, f: impl Fn([i32; 3]) -> Complex64 + Sync) {
         let n = self.n;
         let h = n / 2 + 1;
-        let signed = |i: usize| if i > n / 2 { i as i32 - n as i32 } else { i as i32 };
+        let signed = |i: usize| {
+            if i > n / 2 {
+                i as i32 - n as i32
+            } else {
+                i as i32
+            }
+        };
         let dim = self.dim;
         self.data
             .par_chunks_mut(n * h)

@@ -19,9 +19,10 @@ use std::sync::OnceLock;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 
-use super::domain::{PlaneSource, SampleOptions, Source, check_n, origin_phase};
+use super::domain::{OriginPhase, PlaneSource, SampleOptions, Source, check_n};
 use super::eval::Terms;
 use super::fft::Spectrum;
+use super::frequency::FrequencyIndex;
 use super::group::Group;
 
 /// One coefficient of a fitted cell: `c_f` for representative `f` (third component 0 in 2D)
@@ -234,23 +235,61 @@ impl FittedCell {
     }
 }
 
-/// `c_f = K_f Σ_Q ĝ(Qᵀ f)` for every `f` in the band of the spectrum's grid.
+/// `c_f = K_f Σ_Q ĝ(Qᵀ f) = K_f |Stab f| Σ_{k ∈ orbit(f)} ĝ(k)` for every `f` in the band
+/// of the spectrum's grid.
+///
+/// One streaming pass over the spectrum instead of |S| random reads per coefficient: every
+/// stored bin `k` adds `ĝ(k)` to the accumulator of its representative, and, when the
+/// half-spectrum stores `k` for both signs (`0 < kx < N/2`), `ĝ(−k) = conj ĝ(k)` to that of
+/// `−k`. Bins whose orbit leaves the band have no accumulator and are skipped.
 pub(crate) fn project(group: &Group, spectrum: &Spectrum) -> Vec<Coefficient> {
     let n = spectrum.n;
-    let domain = group.domain();
-    let scale = 1.0 / (n as f64).powi(group.dimension() as i32);
-    group
-        .frequency_set(n)
-        .into_par_iter()
-        .map(|f| {
+    let d = group.dimension();
+    let phase = OriginPhase::new(group.domain());
+    let scale = 1.0 / (n as f64).powi(d as i32);
+    let reps = group.frequency_set(n);
+    let index = FrequencyIndex::complete(group, &reps, n);
+    let half = (n / 2) as i32;
+    let in_box = |k: [i32; 3]| (0..d).all(|a| k[a].abs() < half);
+    let zero = Complex64::new(0.0, 0.0);
+    // The representative of −k is the partner of k's: one index look-up per bin.
+    let partner: Vec<usize> = reps
+        .par_iter()
+        .map(|&f| index.find(group.partner(f)).unwrap_or(usize::MAX))
+        .collect();
+    let accs = spectrum.par_fold_entries(
+        || vec![zero; reps.len()],
+        |acc, k, v| {
+            if !in_box(k) {
+                return;
+            }
+            let Some(i) = index.find(group.representative_fast(k)) else {
+                return;
+            };
+            let g = v * phase.at(k);
+            acc[i] += g;
+            if k[0] > 0 {
+                // ĝ(−k) = conj ĝ(k) for real samples (the phase conjugates too).
+                if let Some(a) = acc.get_mut(partner[i]) {
+                    *a += g.conj();
+                }
+            }
+        },
+    );
+    let mut total = vec![zero; reps.len()];
+    for acc in accs {
+        for (t, a) in total.iter_mut().zip(acc) {
+            *t += a;
+        }
+    }
+    reps.into_par_iter()
+        .zip(total)
+        .map(|(f, sum)| {
             let k_f = group.normalization(f);
-            let sum: Complex64 = group
-                .images(f)
-                .map(|k| spectrum.raw(k) * origin_phase(domain, k))
-                .sum();
+            let stab = group.stabilizer_order(f) as f64;
             Coefficient {
                 f,
-                c: sum * (k_f * scale),
+                c: sum * (k_f * stab * scale),
                 k_f,
             }
         })
@@ -327,8 +366,13 @@ pub fn fit_samples(group: &Group, n: usize, samples: &[f64]) -> Result<FittedCel
     if let Some(p) = samples.iter().position(|v| !v.is_finite()) {
         let origin = group.domain().origin();
         let idx = [p % n, (p / n) % n, p / (n * n)];
-        let s: [f64; 3] =
-            std::array::from_fn(|a| if a < d { origin[a] + idx[a] as f64 / n as f64 } else { 0.0 });
+        let s: [f64; 3] = std::array::from_fn(|a| {
+            if a < d {
+                origin[a] + idx[a] as f64 / n as f64
+            } else {
+                0.0
+            }
+        });
         return Err(FitError::NonFinite {
             point: group.domain().frame().to_cartesian(s),
             value: samples[p],

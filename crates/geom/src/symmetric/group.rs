@@ -286,14 +286,13 @@ pub fn mat_vec(m: &Matrix, v: [i32; 3]) -> [i32; 3] {
 /// `m · v` for a real vector.
 #[inline]
 pub fn mat_vec_f64(m: &Matrix, v: [f64; 3]) -> [f64; 3] {
-    std::array::from_fn(|i| {
-        m[i][0] as f64 * v[0] + m[i][1] as f64 * v[1] + m[i][2] as f64 * v[2]
-    })
+    std::array::from_fn(|i| m[i][0] as f64 * v[0] + m[i][1] as f64 * v[1] + m[i][2] as f64 * v[2])
 }
 
 fn det(m: &Matrix) -> i64 {
     let m = m.map(|r| r.map(i64::from));
-    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
         + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
 }
 

@@ -4,15 +4,15 @@
 //! A cell is `Φ(x) = Re Σ_{f∈F} c_f φ_f(x)` with `φ_f(x) = K_f Σ_{Q∈S} exp(2πi fᵀQx)`: a
 //! trigonometric polynomial invariant under a point group `S` (`Φ(Qx) = Φ(x)`), negative inside.
 //!
-//! - [`group`]: D3, D4, Td, Oh and groups from generators; frames, reference elements,
+//! - [`group`] — D3, D4, Td, Oh and groups from generators; frames, reference elements,
 //!   sampling domains.
-//! - [`frequency`]: orbits `f ↦ Qᵀf`, representatives (lexicographically largest member),
+//! - [`frequency`] — orbits `f ↦ Qᵀf`, representatives (lexicographically largest member),
 //!   stabilisers, conjugate partners, band-limited frequency sets.
-//! - [`basis`]: `φ_f`.
-//! - [`domain`]: sampling sources on the domain grid; mirroring Td/D3 cells; symmetrization.
-//! - [`fit`]: FFT fit `c_f = K_f Σ_Q ĝ(Qᵀf)` (with the conjugate) and [`FittedCell`].
-//! - [`eval`]: direct summation (value, gradient) and inverse-FFT grids.
-//! - [`blend`]: weighted averages and Minkowski sum/difference.
+//! - [`basis`] — `φ_f`.
+//! - [`domain`] — sampling sources on the domain grid; mirroring Td/D3 cells; symmetrization.
+//! - [`fit`] — FFT fit `c_f = K_f Σ_Q ĝ(Qᵀf)` (with the conjugate) and [`FittedCell`].
+//! - [`eval`] — direct summation (value, gradient) and inverse-FFT grids.
+//! - [`blend`] — weighted averages and Minkowski sum/difference.
 //!
 //! Frames: every public point and gradient is Cartesian, in the reference frame where the cell
 //! has size 1 and its centroid at the origin. Frequencies and grid coordinates are in the
