@@ -808,6 +808,68 @@ mod symmetric {
     }
 
     #[test]
+    fn symmetric_direct_sum_matches_grid_for_explicit_coefficients() {
+        use latticebuild_geom::symmetric::FittedCell;
+        // Sparse sets, including an f without its partner (Td, D3): the grid must still be
+        // Re Σ c_f φ_f, read through both k and −k.
+        let cases: Vec<(Group, Vec<([i32; 3], Complex64)>)> = vec![
+            (
+                Group::td(),
+                vec![
+                    ([2, 1, -1], Complex64::new(0.3, 0.8)),
+                    ([0, 0, 0], Complex64::new(0.1, 0.0)),
+                ],
+            ),
+            (
+                Group::d3(),
+                vec![
+                    ([3, 1, 0], Complex64::new(-0.4, 0.5)),
+                    ([2, 2, 0], Complex64::new(0.2, -0.1)),
+                ],
+            ),
+            (
+                Group::oh(),
+                vec![
+                    ([3, 2, 1], Complex64::new(0.7, 0.0)),
+                    ([1, 0, 0], Complex64::new(0.0, 0.3)),
+                ],
+            ),
+            (Group::d4(), vec![([3, 1, 0], Complex64::new(0.5, 0.2))]),
+        ];
+        for (g, cs) in cases {
+            let d = g.dimension();
+            let cell = FittedCell::from_coefficients(g.clone(), 8, cs.clone()).expect("cell");
+            let origin = g.domain().origin();
+            for m in [8, 12, 6] {
+                let grid = cell.grid(m).expect("grid");
+                for (i, &v) in grid.iter().enumerate() {
+                    let idx = [i % m, (i / m) % m, i / (m * m)];
+                    let s: [f64; 3] = std::array::from_fn(|a| {
+                        if a < d {
+                            origin[a] + idx[a] as f64 / m as f64
+                        } else {
+                            0.0
+                        }
+                    });
+                    // Independent value: Re Σ c_f φ_f(s) with φ from the definition.
+                    let expect: f64 = cs.iter().map(|(f, c)| (c * phi(&g, *f, s)).re).sum();
+                    assert!(
+                        (v - expect).abs() < 1e-12,
+                        "{} m={m}: {v} vs {expect}",
+                        g.name()
+                    );
+                    let x = if g.frame() == Frame::Hexagonal {
+                        skew_to_cart(s)
+                    } else {
+                        s
+                    };
+                    assert!((cell.value(x) - expect).abs() < 1e-12);
+                }
+            }
+        }
+    }
+
+    #[test]
     fn symmetric_gradient_matches_finite_differences() {
         let mut rng = Rng(21);
         for g in all_groups() {
