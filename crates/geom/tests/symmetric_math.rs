@@ -812,7 +812,8 @@ mod symmetric {
         use latticebuild_geom::symmetric::FittedCell;
         // Sparse sets, including an f without its partner (Td, D3): the grid must still be
         // Re Σ c_f φ_f, read through both k and −k.
-        let cases: Vec<(Group, Vec<([i32; 3], Complex64)>)> = vec![
+        type Case = (Group, Vec<([i32; 3], Complex64)>);
+        let cases: Vec<Case> = vec![
             (
                 Group::td(),
                 vec![
@@ -925,6 +926,31 @@ mod symmetric {
         let e = cell.offset(-0.25);
         assert!((e.value([0.1, 0.2, 0.3]) - (p([0.1, 0.2, 0.3]) - 0.25)).abs() < 1e-12);
         assert!((cell.negated().value([0.1, 0.2, 0.3]) + p([0.1, 0.2, 0.3])).abs() < 1e-12);
+    }
+
+    #[test]
+    fn symmetric_grid_sampler_matches_direct_sum() {
+        use latticebuild_geom::field::{Grid, ScalarField};
+        for g in all_groups() {
+            let d = g.dimension();
+            let ball = |x: [f64; 3]| (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt() - 0.3;
+            let cell = fit(&g, 16, &from_fn(ball), &FitOptions::default()).expect("fit");
+            // A grid unrelated to the FFT grid, reaching beyond one period.
+            let grid = Grid::spanning([-0.7, -0.55, -0.6], [0.8, 0.6, 0.65], [13, 11, 9]);
+            let sampler = cell.sampler(&grid);
+            let mut plane = vec![0.0; grid.plane_len()];
+            for k in [0, 4, 8, 4] {
+                sampler.sample_rows(k, 2..7, &mut plane[2 * 13..7 * 13]);
+                for j in 2..7 {
+                    for i in 0..13 {
+                        let z = if d == 3 { grid.coord(2, k) } else { 0.0 };
+                        let x = [grid.coord(0, i), grid.coord(1, j), z];
+                        let e = (plane[i + 13 * j] - cell.value(x)).abs();
+                        assert!(e < 1e-12, "{}: {e:e}", g.name());
+                    }
+                }
+            }
+        }
     }
 
     #[test]

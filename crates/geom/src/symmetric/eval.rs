@@ -22,7 +22,8 @@ use super::fft::{Spectrum, wrap};
 use super::fit::{FitError, FittedCell};
 use super::frequency::FrequencyIndex;
 use super::group::Frame;
-use crate::field::ScalarField;
+use super::sampler::SeparableSampler;
+use crate::field::{Grid, PlaneSampler, ScalarField};
 
 /// Relative bound on what pruning may change in direct evaluation (see the module docs).
 pub const PRUNE_TOLERANCE: f64 = 1e-12;
@@ -150,6 +151,14 @@ impl Terms {
             terms.w.push(w);
         }
         terms
+    }
+
+    /// The frame and every plane wave `(k, w)` of `Re Σ w·exp(2πi k·s)`.
+    pub(crate) fn plane_waves(&self) -> (Frame, impl Iterator<Item = ([i32; 3], Complex64)> + '_) {
+        let waves = self.rows.iter().flat_map(move |row| {
+            (row.start..row.end).map(move |i| ([self.kx[i], row.ky, row.kz], self.w[i]))
+        });
+        (self.frame, waves)
     }
 
     /// Number of plane waves after pruning and merging.
@@ -323,5 +332,11 @@ impl ScalarField for FittedCell {
         for (i, o) in out.iter_mut().enumerate() {
             *o = terms.eval([xs[i], ys[i], zs[i]], false, &mut t).0;
         }
+    }
+
+    /// Separable evaluation (module `symmetric::sampler`): per-axis tables instead of
+    /// per-point sums over all terms, so big contour grids of rich fits stay affordable.
+    fn sampler<'a>(&'a self, grid: &Grid) -> Box<dyn PlaneSampler + 'a> {
+        Box::new(SeparableSampler::new(self.terms(), grid))
     }
 }

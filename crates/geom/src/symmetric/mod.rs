@@ -31,6 +31,7 @@ mod fft;
 pub mod fit;
 pub mod frequency;
 pub mod group;
+mod sampler;
 
 pub use blend::{minkowski_difference, minkowski_sum, weighted_average};
 pub use domain::{Extend, FnSource, SampleOptions, Source, from_fn, sample};
