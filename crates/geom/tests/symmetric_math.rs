@@ -1079,6 +1079,7 @@ mod symmetric {
             u = u.map(|c| c / l);
             worst = worst.max((radius(&sum, u) - 0.32).abs());
         }
+        println!("Minkowski sum radius error {worst:.4} (grid step {step:.4})");
         assert!(worst <= step, "radius off by {worst} (grid step {step})");
         // Difference: (A ⊕ B) ⊖ B for balls is A again.
         let diff = minkowski_difference(&sum, &b, n).expect("difference");
@@ -1093,13 +1094,14 @@ mod symmetric {
             u = u.map(|c| c / l);
             worst = worst.max((radius(&diff, u) - 0.12).abs());
         }
+        println!("Minkowski difference radius error {worst:.4} (grid step {step:.4})");
         assert!(worst <= 2.0 * step, "difference radius off by {worst}");
     }
 
     #[test]
-    fn symmetric_minkowski_difference_reflects_b_for_td() {
-        // In 2D D3: A ⊕ B with B a small triangle-ish blob: the sum contains a + b for
-        // a ∈ A, b ∈ B, not a − b. Use D3 where −B ≠ B.
+    fn symmetric_minkowski_uses_point_reflection_d3() {
+        // D3 does not contain −I, so −B ≠ B: the sum must contain a + b (not a − b) and the
+        // difference must erode by −B.
         let g = Group::d3();
         let n = 64;
         // B: the triangle scaled by 0.3 (pointing to +y), as an indicator.
@@ -1201,6 +1203,17 @@ mod symmetric {
                 .to_string()
                 .contains("vanishes")
         );
+        // Overflowing generators and frequencies are rejected, not wrapped.
+        let huge = [[i32::MAX, 1, 0], [i32::MAX, i32::MAX, 0], [0, 7, i32::MAX]];
+        assert!(Group::from_generators(3, &[huge]).is_err());
+        assert!(matches!(
+            FittedCell::from_coefficients(
+                Group::td(),
+                8,
+                [([i32::MAX, i32::MIN, 0], Complex64::new(1.0, 0.0))]
+            ),
+            Err(FitError::OutOfBand { .. })
+        ));
         // Explicit coefficients are checked.
         use latticebuild_geom::symmetric::FittedCell;
         assert!(matches!(

@@ -104,27 +104,27 @@ impl Work {
 
 /// Running minimum and maximum of the samples.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Range {
+pub(crate) struct SampleRange {
     pub(crate) min: f64,
     pub(crate) max: f64,
 }
 
-impl Range {
-    fn of(v: &[f64]) -> Range {
+impl SampleRange {
+    fn of(v: &[f64]) -> SampleRange {
         v.iter().fold(
-            Range {
+            SampleRange {
                 min: f64::INFINITY,
                 max: f64::NEG_INFINITY,
             },
-            |r, &x| Range {
+            |r, &x| SampleRange {
                 min: r.min.min(x),
                 max: r.max.max(x),
             },
         )
     }
 
-    fn join(self, o: Range) -> Range {
-        Range {
+    fn join(self, o: SampleRange) -> SampleRange {
+        SampleRange {
             min: self.min.min(o.min),
             max: self.max.max(o.max),
         }
@@ -179,7 +179,7 @@ impl Spectrum {
     pub(crate) fn forward(
         n: usize,
         source: &PlaneSource<'_>,
-    ) -> Result<(Spectrum, Range), FitError> {
+    ) -> Result<(Spectrum, SampleRange), FitError> {
         let dim = if source.planes() == 1 { 2 } else { 3 };
         Spectrum::forward_with(n, dim, &|z, out| source.sample_plane(z, out))
     }
@@ -202,14 +202,14 @@ impl Spectrum {
         n: usize,
         dim: usize,
         plane: &PlaneFn<'_>,
-    ) -> Result<(Spectrum, Range), FitError> {
+    ) -> Result<(Spectrum, SampleRange), FitError> {
         let h = n / 2 + 1;
         let plans = Plans::new(n);
         if dim == 2 {
             let mut w = Work::new(n, &plans);
             let mut data = vec![ZERO; n * h];
             plane(0, &mut w.real)?;
-            let range = Range::of(&w.real);
+            let range = SampleRange::of(&w.real);
             forward_plane(n, &plans, &mut w, &mut data);
             return Ok((Spectrum { n, dim, data }, range));
         }
@@ -221,18 +221,18 @@ impl Spectrum {
                 || Work::new(n, &plans),
                 |w, (z, out)| {
                     plane(z, &mut w.real)?;
-                    let r = Range::of(&w.real);
+                    let r = SampleRange::of(&w.real);
                     forward_plane(n, &plans, w, out);
                     Ok(r)
                 },
             )
-            .collect::<Result<Vec<Range>, FitError>>()?;
+            .collect::<Result<Vec<SampleRange>, FitError>>()?;
         let range = ranges.into_iter().fold(
-            Range {
+            SampleRange {
                 min: f64::INFINITY,
                 max: f64::NEG_INFINITY,
             },
-            Range::join,
+            SampleRange::join,
         );
         let mut data = vec![ZERO; n * n * h];
         data.par_chunks_mut(n * h).enumerate().for_each_init(

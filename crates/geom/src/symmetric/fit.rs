@@ -154,6 +154,10 @@ impl FittedCell {
         check_n(n, group.dimension())?;
         let mut cs: Vec<Coefficient> = Vec::new();
         for (f, c) in coefficients {
+            // Rules out overflow in the orbit arithmetic below as well as the band.
+            if f.iter().any(|&v| v.unsigned_abs() as usize >= n) {
+                return Err(FitError::OutOfBand { f, n });
+            }
             if group.dimension() == 2 && f[2] != 0 || !group.is_representative(f) {
                 return Err(FitError::NotRepresentative { f });
             }

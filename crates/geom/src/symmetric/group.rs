@@ -290,10 +290,12 @@ pub fn mat_vec_f64(m: &Matrix, v: [f64; 3]) -> [f64; 3] {
 }
 
 fn det(m: &Matrix) -> i64 {
-    let m = m.map(|r| r.map(i64::from));
-    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+    // i128: a product of three arbitrary i32 entries overflows i64.
+    let m = m.map(|r| r.map(i128::from));
+    let d = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
         - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    d.clamp(i64::MIN as i128, i64::MAX as i128) as i64
 }
 
 /// All signed permutation matrices of size `dim` (embedded in 3×3), optionally only those

@@ -11,8 +11,15 @@
 //! - [`basis`] — `φ_f`.
 //! - [`domain`] — sampling sources on the domain grid; mirroring Td/D3 cells; symmetrization.
 //! - [`fit`] — FFT fit `c_f = K_f Σ_Q ĝ(Qᵀf)` (with the conjugate) and [`FittedCell`].
-//! - [`eval`] — direct summation (value, gradient) and inverse-FFT grids.
+//! - [`eval`] — direct summation (value, gradient) and inverse-FFT grids; `FittedCell` is a
+//!   [`ScalarField`](crate::field::ScalarField) whose grid sampler is separable per axis
+//!   (private `sampler` module), so the contourer can mesh rich fits.
 //! - [`blend`] — weighted averages and Minkowski sum/difference.
+//! - `fft` (private) — realfft along x (contiguous), rustfft along y and z, rayon across
+//!   planes and rows.
+//!
+//! Errors: one [`FitError`] for sampling, fitting, evaluating and blending, and [`GroupError`]
+//! for groups; nothing here panics on user input.
 //!
 //! Frames: every public point and gradient is Cartesian, in the reference frame where the cell
 //! has size 1 and its centroid at the origin. Frequencies and grid coordinates are in the
