@@ -10,7 +10,7 @@
 //!   stabilisers, conjugate partners, band-limited frequency sets.
 //! - [`basis`] — `φ_f`.
 //! - [`domain`] — sampling sources on the domain grid; mirroring Td/D3 cells; symmetrization.
-//! - [`fit`] — FFT fit `c_f = K_f Σ_Q ĝ(Qᵀf)` (with the conjugate) and [`FittedCell`].
+//! - [`fit`](mod@fit) — FFT fit `c_f = K_f Σ_Q ĝ(Qᵀf)` (with the conjugate) and [`FittedCell`].
 //! - [`eval`] — direct summation (value, gradient) and inverse-FFT grids; `FittedCell` is a
 //!   [`ScalarField`](crate::field::ScalarField) whose grid sampler is separable per axis
 //!   (private `sampler` module), so the contourer can mesh rich fits.
@@ -27,7 +27,7 @@
 //!
 //! Not here yet (seams kept): the face-normal constraint (METHOD.md §6) would build its
 //! constraint rows from [`Group::orbit`], [`Group::normalization`] and the coefficients, and
-//! return a cell through [`FittedCell::from_coefficients`]; `n = "auto"` would call [`fit`] at
+//! return a cell through [`FittedCell::from_coefficients`]; `n = "auto"` would call [`fit()`] at
 //! successive `N`.
 
 pub mod basis;
