@@ -621,6 +621,48 @@ mod symmetric {
         }
     }
 
+    #[test]
+    fn symmetric_coefficients_real_or_conjugate_partners() {
+        // Real input: Oh and D4 coefficients are real; Td and D3 partners are conjugate.
+        let mut rng = Rng(31);
+        for g in all_groups() {
+            let d = g.dimension();
+            let poly = random_poly(&mut rng, d, 5, 5);
+            let input = move |x: [f64; 3]| eval_poly(&poly, x) + (x[0] - 0.1).abs() - 0.2;
+            let cell = fit(&g, 16, &from_fn(input), &no_check()).expect("fit");
+            let has_inversion = g.elements().contains(&[
+                [-1, 0, 0],
+                [0, -1, 0],
+                [0, 0, if d == 3 { -1 } else { 1 }],
+            ]);
+            assert_eq!(has_inversion, matches!(g.name(), "Oh" | "D4"));
+            let mut complex = 0;
+            for c in cell.coefficients() {
+                // The partner, found by brute force: the F member in the orbit of −f.
+                let neg = [-c.f[0], -c.f[1], -c.f[2]];
+                let ts: Vec<Matrix> = g.elements().iter().map(tr).collect();
+                let p = ts
+                    .iter()
+                    .map(|t| apply(t, neg))
+                    .find(|q| cell.coefficients().iter().any(|k| k.f == *q))
+                    .expect("partner in F");
+                assert!((cell.coefficient(p) - c.c.conj()).norm() < 1e-14);
+                if has_inversion {
+                    assert!(c.c.im.abs() < 1e-14);
+                } else if c.c.im.abs() > 1e-6 {
+                    complex += 1;
+                }
+            }
+            if !has_inversion {
+                assert!(
+                    complex > 0,
+                    "{}: expected genuinely complex coefficients",
+                    g.name()
+                );
+            }
+        }
+    }
+
     // ---------- symmetry ----------
 
     #[test]
