@@ -15,5 +15,6 @@ pub mod field;
 pub mod mesh;
 pub mod mesh_io;
 pub mod spelling;
+pub mod symmetric;
 pub mod tpms;
 pub mod validate;

@@ -1,0 +1,51 @@
+//! Symmetric Fourier unit cells (Chen, Kabaria & Lew 2025, with the corrections of
+//! `shared/docs/METHOD.md`).
+//!
+//! A cell is `Φ(x) = Re Σ_{f∈F} c_f φ_f(x)` with `φ_f(x) = K_f Σ_{Q∈S} exp(2πi fᵀQx)`: a
+//! trigonometric polynomial invariant under a point group `S` (`Φ(Qx) = Φ(x)`), negative inside.
+//!
+//! - [`group`] — D3, D4, Td, Oh and groups from generators; frames, reference elements,
+//!   sampling domains.
+//! - [`frequency`] — orbits `f ↦ Qᵀf`, representatives (lexicographically largest member),
+//!   stabilisers, conjugate partners, band-limited frequency sets.
+//! - [`basis`] — `φ_f`.
+//! - [`domain`] — sampling sources on the domain grid; mirroring Td/D3 cells; symmetrization.
+//! - [`fit`](mod@fit) — FFT fit `c_f = K_f Σ_Q ĝ(Qᵀf)` (with the conjugate) and [`FittedCell`].
+//! - [`eval`] — direct summation (value, gradient) and inverse-FFT grids; `FittedCell` is a
+//!   [`ScalarField`](crate::field::ScalarField) whose grid sampler is separable per axis
+//!   (private `sampler` module), so the contourer can mesh rich fits.
+//! - [`blend`] — weighted averages and Minkowski sum/difference.
+//! - `fft` (private) — realfft along x (contiguous), rustfft along y and z, rayon across
+//!   planes and rows.
+//!
+//! Errors: one [`FitError`] for sampling, fitting, evaluating and blending, and [`GroupError`]
+//! for groups; nothing here panics on user input.
+//!
+//! Frames: every public point and gradient is Cartesian, in the reference frame where the cell
+//! has size 1 and its centroid at the origin. Frequencies and grid coordinates are in the
+//! group's frame (skew for D3). 2D cells use `[x, y, 0]` and frequencies `[f1, f2, 0]`.
+//!
+//! Not here yet (seams kept): the face-normal constraint (METHOD.md §6) would build its
+//! constraint rows from [`Group::orbit`], [`Group::normalization`] and the coefficients, and
+//! return a cell through [`FittedCell::from_coefficients`]; `n = "auto"` would call [`fit()`] at
+//! successive `N`.
+
+pub mod basis;
+pub mod blend;
+pub mod domain;
+pub mod eval;
+mod fft;
+pub mod fit;
+pub mod frequency;
+pub mod group;
+mod sampler;
+
+pub use blend::{minkowski_difference, minkowski_sum, weighted_average};
+pub use domain::{Extend, FnSource, SampleOptions, Source, from_fn, sample};
+pub use eval::PRUNE_TOLERANCE;
+pub use fit::{Coefficient, FitError, FitOptions, FittedCell, Side, fit, fit_samples};
+pub use group::{
+    Domain, Frame, Group, GroupError, IDENTITY, MAX_GROUP_ORDER, Matrix, ReferenceElement,
+    TETRAHEDRON_FACE_NORMALS,
+};
+pub use rustfft::num_complex::Complex64;
