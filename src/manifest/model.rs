@@ -35,6 +35,9 @@ pub struct Name {
 pub struct Cell {
     pub name: Name,
     pub source: CellSource,
+    /// Present when the cell is fitted onto a symmetric Fourier basis (`symmetry = …`), and
+    /// always for blends and Minkowski combinations (which take their members' group).
+    pub symmetric: Option<Symmetric>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -43,6 +46,58 @@ pub enum CellSource {
     Tpms(String),
     /// A free-form expression in the cell coordinates x, y, z (period 1 is up to the user).
     Expr(String),
+    /// Weighted average of the coefficients of symmetric cells of one group (names of cells;
+    /// weights as given, not normalised).
+    Blend {
+        cells: Vec<String>,
+        weights: Vec<f64>,
+    },
+    /// Minkowski sum or difference of two symmetric cells of one group.
+    Minkowski { op: MinkowskiOp, cells: [String; 2] },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MinkowskiOp {
+    Sum,
+    Difference,
+}
+
+/// How a cell is fitted, constrained and adjusted (METHOD.md; the sample → fit → constrain
+/// stages). Validation guarantees the group is known (or its generators close to a finite
+/// group of at most 1000 elements) and `n` is even and at least 4.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Symmetric {
+    pub group: GroupSpec,
+    pub n: FitResolution,
+    /// For D3 and Td: fill the extended domain by mirroring (default) or sample it as is.
+    pub mirror: bool,
+    /// Replace the source by the union of its group images before fitting.
+    pub symmetrize: bool,
+    /// Constrain the cell to meet its element's faces at right angles (METHOD.md §6).
+    pub normal_to_faces: bool,
+    /// Dilation (positive grows the solid) in cell units: Φ − offset.
+    pub offset: f64,
+    /// Swap solid and void: −Φ.
+    pub invert: bool,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum GroupSpec {
+    /// `"D3"`, `"D4"`, `"Td"` or `"Oh"`, canonical spelling.
+    Named(String),
+    /// Integer generator matrices (rows; 2×2 given as the upper-left block for dimension 2).
+    Generators {
+        dimension: usize,
+        generators: Vec<[[i32; 3]; 3]>,
+    },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FitResolution {
+    /// Samples per axis of the sampling domain (even, ≥ 4).
+    Fixed(usize),
+    /// Double N from 32 until the fitted zero set moves less than `tolerance` (cell units).
+    Auto { tolerance: f64 },
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -50,6 +105,10 @@ pub struct Output {
     pub name: Name,
     /// The name of the cell it contours (a key of [`Manifest::cells`]).
     pub cell: String,
+    /// `over = "element"`: contour the cell clipped to its reference element (square, cube,
+    /// triangle or tetrahedron; cell size 1, centroid at the origin) instead of a periodic box.
+    /// The domain is then the element's bounding box and `cell_size` is 1.
+    pub over_element: bool,
     pub domain_min: [f64; 3],
     pub domain_max: [f64; 3],
     /// Model units per period of the cell, per axis.

@@ -242,6 +242,7 @@ impl Checker<'_, '_, '_> {
         Some(Cell {
             name: self.name(key),
             source: source?,
+            symmetric: None,
         })
     }
 
@@ -304,6 +305,7 @@ impl Checker<'_, '_, '_> {
         Some(Output {
             name: self.name(key),
             cell: cell?,
+            over_element: false,
             domain_min,
             domain_max,
             cell_size: cell_size?,

@@ -25,6 +25,7 @@ impl CellStage {
         match &self.source {
             CellSource::Tpms(name) => key.param("tpms", name.as_str()),
             CellSource::Expr(text) => key.param("expr", text.as_str()),
+            CellSource::Blend { .. } | CellSource::Minkowski { .. } => key.param("combined", true),
         }
     }
 
@@ -36,6 +37,9 @@ impl CellStage {
                 .formula
                 .to_string(),
             CellSource::Expr(text) => text.clone(),
+            CellSource::Blend { .. } | CellSource::Minkowski { .. } => {
+                return Err("blends and Minkowski combinations have no formula".into());
+            }
         };
         Ok(formula.into_bytes())
     }
