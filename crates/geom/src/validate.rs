@@ -46,13 +46,13 @@
 //! themselves make a mesh non-watertight; `manifold` is the verdict that rejects them.
 //!
 //! Method, four passes, each parallel and each streaming through memory: (1) triangles: area,
-//! volume, degeneracy, and the number of corners at every vertex; (2) referenced vertices:
-//! bounding box, and duplicate positions by radix-partitioning position hashes into
-//! cache-sized hash tables; (3) a counting sort lists, for every vertex, the two other corners
-//! of each triangle at it (compressed rows); (4) every vertex examines its own fan locally, and
-//! each edge `{a, b}` with `a < b` is classified from vertex `a` only, so no global edge table
-//! is needed. Besides the mesh, the passes hold about 24 bytes per triangle (the per-vertex
-//! lists) and a few tens of bytes per vertex.
+//! volume, degeneracy, and the number of corners at every vertex; (2) vertices: where each
+//! one's list will start, the bounding box, and duplicate positions by radix-partitioning
+//! position hashes into cache-sized hash tables; (3) a counting sort lists, for every vertex,
+//! the two other corners of each triangle at it (compressed rows); (4) every vertex examines
+//! its own fan locally, and each edge `{a, b}` with `a < b` is classified from vertex `a`
+//! only, so no global edge table is needed. Besides the mesh, the passes hold about 24 bytes
+//! per triangle (the per-vertex lists) and a few tens of bytes per vertex.
 
 use crate::mesh::Mesh;
 use rayon::prelude::*;
@@ -96,9 +96,9 @@ pub fn check(mesh: &Mesh) -> MeshCheck {
 /// The passes, each parallel inside, run one after the other: with few cores, running them
 /// side by side only adds contention.
 fn analyse<I: Index>(mesh: &Mesh) -> MeshCheck {
-    let (geometry, starts) = triangle_pass::<I>(mesh);
-    let vertices = vertex_pass(mesh, &starts);
-    let links = Links::scatter(mesh, starts);
+    let (geometry, degrees) = triangle_pass::<I>(mesh);
+    let (cursors, vertices) = vertex_pass(mesh, degrees);
+    let links = Links::scatter(mesh, cursors);
     let fans = fan_pass(&links);
     drop(links);
 
@@ -243,13 +243,12 @@ struct Geometry {
 }
 
 /// Sums the geometry of every triangle and counts the corners at every vertex. Returns the
-/// geometry and the adjacency's `cursors`: `cursors[v + 1]` is where vertex `v`'s links will
-/// start, `cursors[0]` is 0 (see [`Links::scatter`]).
+/// geometry and the corner counts, one array per part (see below).
 ///
 /// The triangles are cut into one contiguous part per thread (so each part reads its
 /// triangles once, for both jobs); each part counts degrees into a private array, and the
 /// arrays are summed afterwards.
-fn triangle_pass<I: Index>(mesh: &Mesh) -> (Geometry, Cursors<I>) {
+fn triangle_pass<I: Index>(mesh: &Mesh) -> (Geometry, Vec<Vec<I>>) {
     let n = mesh.vertices.len();
     // Volumes are summed relative to a point on the mesh, which keeps the terms small when the
     // mesh sits far from the origin; the origin-relative volume is recovered exactly below.
@@ -293,32 +292,8 @@ fn triangle_pass<I: Index>(mesh: &Mesh) -> (Geometry, Cursors<I>) {
         area: total.twice_area / 2.0,
     };
 
-    // cursors[v + 1] = degree of v, summed over the parts, then turned into the start of v.
-    let mut cursors = vec![I::default(); n + 1];
-    cursors[1..]
-        .par_chunks_mut(VERTEX_BLOCK)
-        .enumerate()
-        .for_each(|(block, out)| {
-            let first = block * VERTEX_BLOCK;
-            for (i, slot) in out.iter_mut().enumerate() {
-                let degree: usize = results.iter().map(|(_, d)| d[first + i].to_usize()).sum();
-                *slot = I::from_usize(degree);
-            }
-        });
-    drop(results);
-    let mut start = 0;
-    for slot in &mut cursors[1..] {
-        let degree = slot.to_usize();
-        *slot = I::from_usize(start);
-        start += degree;
-    }
-    (
-        geometry,
-        Cursors {
-            cursors,
-            total: start,
-        },
-    )
+    let degrees = results.into_iter().map(|(_, degrees)| degrees).collect();
+    (geometry, degrees)
 }
 
 /// The geometry of one chunk of triangles; also counts their corners into `degrees`.
@@ -379,23 +354,10 @@ fn dot(u: [f64; 3], v: [f64; 3]) -> f64 {
 // Vertex → link adjacency, built by counting sort.
 
 /// The counting sort's state between counting and scattering: `cursors[v + 1]` is the start of
-/// vertex `v`'s links (so `v` is referenced when the next start is larger), `total` the number
-/// of links.
+/// vertex `v`'s links, `cursors[0]` is 0, `total` the number of links.
 struct Cursors<I> {
     cursors: Vec<I>,
     total: usize,
-}
-
-impl<I: Index> Cursors<I> {
-    fn vertex_count(&self) -> usize {
-        self.cursors.len() - 1
-    }
-
-    #[inline]
-    fn is_referenced(&self, v: usize) -> bool {
-        let end = self.cursors.get(v + 2).map_or(self.total, |c| c.to_usize());
-        self.cursors[v + 1].to_usize() < end
-    }
 }
 
 /// The link of triangle corner `v` of `[v, next, prev]` (in winding order): its two sides
@@ -488,7 +450,7 @@ impl<I: Index> Links<I> {
 // ---------------------------------------------------------------------------------------------
 // Fan pass: edges and vertex fans.
 
-/// Vertices per parallel work item of the vertex and fan passes.
+/// Vertices per parallel work item of the fan pass.
 const VERTEX_BLOCK: usize = 1 << 13;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -752,8 +714,9 @@ fn union(parent: &mut [u32], a: u32, b: u32) {
 /// for their hash tables to stay in the cache.
 const PARTITION_SIZE: usize = 1 << 14;
 
-/// Vertices per chunk of the grouping step.
-const DUPLICATE_CHUNK: usize = 1 << 17;
+/// Vertices per parallel work item of the vertex pass (each groups its own duplicate-search
+/// entries).
+const VERTEX_CHUNK: usize = 1 << 17;
 
 struct VertexSums {
     referenced: usize,
@@ -762,7 +725,9 @@ struct VertexSums {
     bbox_max: [f32; 3],
 }
 
-/// Counts and bounds the referenced vertices, and counts those whose position bit-equals that
+/// Visits every vertex once: sums its corner counts over the parts of the triangle pass (into
+/// the counting sort's cursors), and if it is referenced, bounds it and prepares the search
+/// for duplicate positions, which counts referenced vertices whose position bit-equals that
 /// of a referenced vertex with a smaller index (a position shared by `k` vertices counts
 /// `k − 1`).
 ///
@@ -771,8 +736,8 @@ struct VertexSums {
 /// parallel, group their entries by partition (high hash bits) with a counting sort; then each
 /// partition, in parallel, puts the entries of every chunk into a table of its own. Entries
 /// with equal hash bits have their actual positions compared, so hash collisions never count.
-fn vertex_pass<I: Index>(mesh: &Mesh, cursors: &Cursors<I>) -> VertexSums {
-    let n = cursors.vertex_count();
+fn vertex_pass<I: Index>(mesh: &Mesh, degrees: Vec<Vec<I>>) -> (Cursors<I>, VertexSums) {
+    let n = mesh.vertices.len();
     let bits = (n / PARTITION_SIZE)
         .max(1)
         .next_power_of_two()
@@ -788,14 +753,21 @@ fn vertex_pass<I: Index>(mesh: &Mesh, cursors: &Cursors<I>) -> VertexSums {
         bbox_min: [f32; 3],
         bbox_max: [f32; 3],
     }
-    let chunks: Vec<Chunk> = (0..n.div_ceil(DUPLICATE_CHUNK))
-        .into_par_iter()
-        .map_init(Vec::new, |entries: &mut Vec<Entry>, chunk| {
+    // cursors[v + 1] = degree of v for now.
+    let mut cursors = vec![I::default(); n + 1];
+    let chunks: Vec<Chunk> = cursors[1..]
+        .par_chunks_mut(VERTEX_CHUNK)
+        .enumerate()
+        .map_init(Vec::new, |entries: &mut Vec<Entry>, (chunk, out)| {
+            let first = chunk * VERTEX_CHUNK;
             let mut bbox_min = [f32::INFINITY; 3];
             let mut bbox_max = [f32::NEG_INFINITY; 3];
             entries.clear();
-            for v in chunk * DUPLICATE_CHUNK..((chunk + 1) * DUPLICATE_CHUNK).min(n) {
-                if cursors.is_referenced(v) {
+            for (i, slot) in out.iter_mut().enumerate() {
+                let v = first + i;
+                let degree: usize = degrees.iter().map(|part| part[v].to_usize()).sum();
+                *slot = I::from_usize(degree);
+                if degree > 0 {
                     let p = &mesh.vertices[v];
                     for a in 0..3 {
                         bbox_min[a] = bbox_min[a].min(p[a]);
@@ -811,12 +783,12 @@ fn vertex_pass<I: Index>(mesh: &Mesh, cursors: &Cursors<I>) -> VertexSums {
             for p in 0..partitions {
                 starts[p + 1] += starts[p];
             }
-            let mut cursors = starts.clone();
+            let mut next = starts.clone();
             let mut grouped = vec![Entry::EMPTY; entries.len()];
             for &entry in entries.iter() {
-                let cursor = &mut cursors[partition_of(entry)];
-                grouped[*cursor] = entry;
-                *cursor += 1;
+                let at = &mut next[partition_of(entry)];
+                grouped[*at] = entry;
+                *at += 1;
             }
             Chunk {
                 starts,
@@ -826,6 +798,15 @@ fn vertex_pass<I: Index>(mesh: &Mesh, cursors: &Cursors<I>) -> VertexSums {
             }
         })
         .collect();
+    drop(degrees);
+
+    // cursors[v + 1] = start of v.
+    let mut total = 0;
+    for slot in &mut cursors[1..] {
+        let degree = slot.to_usize();
+        *slot = I::from_usize(total);
+        total += degree;
+    }
 
     let duplicates = (0..partitions)
         .into_par_iter()
@@ -855,7 +836,7 @@ fn vertex_pass<I: Index>(mesh: &Mesh, cursors: &Cursors<I>) -> VertexSums {
             sums.bbox_max[a] = sums.bbox_max[a].max(chunk.bbox_max[a]);
         }
     }
-    sums
+    (Cursors { cursors, total }, sums)
 }
 
 /// A referenced vertex in the duplicate search: a marker bit (so no entry is zero, the empty

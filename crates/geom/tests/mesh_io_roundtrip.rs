@@ -583,7 +583,8 @@ fn empty_mesh_files_are_exactly_the_headers() {
     assert_eq!(write(&empty, Format::Off, Encoding::Ascii), b"OFF\n0 0 0\n");
     assert_eq!(
         write(&empty, Format::Vtk, Encoding::Ascii),
-        b"# vtk DataFile Version 3.0\nlatticebuild mesh\nASCII\nDATASET POLYDATA\nPOINTS 0 float\nPOLYGONS 0 0\n"
+        b"# vtk DataFile Version 3.0\nlatticebuild mesh\nASCII\nDATASET POLYDATA\n\
+          POINTS 0 float\nPOLYGONS 0 0\n"
     );
 }
 

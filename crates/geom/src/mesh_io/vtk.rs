@@ -31,7 +31,8 @@ pub(super) fn write(mesh: &Mesh, encoding: Encoding, out: &mut dyn Write) -> io:
         return Err(io::Error::new(
             io::ErrorKind::InvalidInput,
             format!(
-                "legacy VTK counts and indices are 32-bit signed: mesh has {} vertices, {} triangles",
+                "legacy VTK counts and indices are 32-bit signed: \
+                 mesh has {} vertices, {} triangles",
                 mesh.vertices.len(),
                 mesh.triangles.len()
             ),
@@ -43,7 +44,8 @@ pub(super) fn write(mesh: &Mesh, encoding: Encoding, out: &mut dyn Write) -> io:
     };
     write!(
         out,
-        "# vtk DataFile Version 3.0\nlatticebuild mesh\n{name}\nDATASET POLYDATA\nPOINTS {} float\n",
+        "# vtk DataFile Version 3.0\nlatticebuild mesh\n{name}\nDATASET POLYDATA\n\
+         POINTS {} float\n",
         mesh.vertices.len()
     )?;
     match encoding {
