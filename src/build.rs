@@ -122,8 +122,54 @@ impl<'a> Builder<'a> {
     /// Builds `targets` (all outputs when empty); the caller has checked the names.
     pub fn build(mut self, targets: &[String]) -> Result<Vec<OutputResult>, BuildError> {
         let needed = self.graph.needed(targets).unwrap_or_default();
+        self.run_nodes(&needed)?;
+        let mut results = Vec::new();
+        for (name, &write) in &self.graph.outputs {
+            let Some(Value::Written(written)) =
+                self.resolved.get(&write).and_then(|r| r.value.clone())
+            else {
+                continue;
+            };
+            let mut chain = Vec::new();
+            let mut stack = vec![write];
+            while let Some(id) = stack.pop() {
+                chain.push(id);
+                stack.extend(&self.graph.nodes[id].inputs);
+            }
+            chain.sort_unstable();
+            chain.dedup();
+            let stages = chain
+                .iter()
+                .filter_map(|id| self.runs.get(id).cloned())
+                .collect();
+            results.push(OutputResult {
+                name: name.clone(),
+                written: (*written).clone(),
+                stages,
+            });
+        }
+        Ok(results)
+    }
+
+    /// Builds node `id` and what it needs, and returns its payload (for `latticebuild cell`).
+    pub fn build_node(mut self, id: NodeId) -> Result<Vec<u8>, BuildError> {
+        let needed = self.graph.closure(&[id]);
+        self.run_nodes(&needed)?;
+        let mut ignore = |_: Key, _: Arc<MeshArtifact>, _: ContentHash| {};
+        self.load(id, &mut ignore)?;
+        match self.resolved[&id].value.clone() {
+            Some(Value::Bytes(bytes)) => Ok((*bytes).clone()),
+            _ => Err(BuildError::Stage {
+                node: self.graph.nodes[id].name.clone(),
+                message: "its payload is not a byte table".into(),
+            }),
+        }
+    }
+
+    /// Runs `needed` (closed under inputs, in order) level by level, then collects garbage.
+    fn run_nodes(&mut self, needed: &[NodeId]) -> Result<(), BuildError> {
         let mut level = vec![0usize; self.graph.nodes.len()];
-        for &id in &needed {
+        for &id in needed {
             level[id] = self.graph.nodes[id]
                 .inputs
                 .iter()
@@ -167,33 +213,8 @@ impl<'a> Builder<'a> {
             }
             outcome
         })?;
-        self.collect_garbage(&needed)?;
-        let mut results = Vec::new();
-        for (name, &write) in &self.graph.outputs {
-            let Some(Value::Written(written)) =
-                self.resolved.get(&write).and_then(|r| r.value.clone())
-            else {
-                continue;
-            };
-            let mut chain = Vec::new();
-            let mut stack = vec![write];
-            while let Some(id) = stack.pop() {
-                chain.push(id);
-                stack.extend(&self.graph.nodes[id].inputs);
-            }
-            chain.sort_unstable();
-            chain.dedup();
-            let stages = chain
-                .iter()
-                .filter_map(|id| self.runs.get(id).cloned())
-                .collect();
-            results.push(OutputResult {
-                name: name.clone(),
-                written: (*written).clone(),
-                stages,
-            });
-        }
-        Ok(results)
+        self.collect_garbage(needed)?;
+        Ok(())
     }
 
     /// Resolves one level: cache lookups first, then the misses in parallel. Meshes are handed
@@ -358,8 +379,25 @@ impl<'a> Builder<'a> {
                 .clone()
                 .expect("inputs are loaded")
         };
+        let bytes = |k: usize| match input(k) {
+            Value::Bytes(b) => Ok(b),
+            _ => Err(format!(
+                "input {k} of `{}` is not a byte payload",
+                node.name
+            )),
+        };
         match &node.stage {
             Stage::Cell(stage) => Ok(Value::Bytes(Arc::new(stage.run()?))),
+            Stage::Sample(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
+            Stage::Fit(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
+            Stage::Constrain(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
+            Stage::Combine(stage) => {
+                let inputs = (0..node.inputs.len())
+                    .map(bytes)
+                    .collect::<Result<Vec<_>, _>>()?;
+                let slices: Vec<&[u8]> = inputs.iter().map(|b| b.as_slice()).collect();
+                Ok(Value::Bytes(Arc::new(stage.run(&slices)?)))
+            }
             Stage::Contour(stage) => {
                 let Value::Bytes(cell) = input(0) else {
                     return Err("input is not a cell".into());
@@ -416,7 +454,11 @@ impl<'a> Builder<'a> {
 
 fn decode(stage: &Stage, payload: Vec<u8>) -> Result<Value, String> {
     match stage {
-        Stage::Cell(_) => Ok(Value::Bytes(Arc::new(payload))),
+        Stage::Cell(_)
+        | Stage::Sample(_)
+        | Stage::Fit(_)
+        | Stage::Combine(_)
+        | Stage::Constrain(_) => Ok(Value::Bytes(Arc::new(payload))),
         Stage::Contour(_) => Ok(Value::Mesh(Arc::new(MeshArtifact::decode(&payload)?))),
         Stage::Write(_) => serde_json::from_slice(&payload)
             .map(|w| Value::Written(Arc::new(w)))

@@ -40,6 +40,22 @@ enum Command {
     Graph(ManifestArgs),
     /// Remove this manifest's cache entries
     Clean(ManifestArgs),
+    /// Fit a symmetric cell (from the cache when fresh) and print its coefficients and values
+    Cell(CellArgs),
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct CellArgs {
+    #[command(flatten)]
+    pub manifest: ManifestArgs,
+    /// The cell, by its name in the manifest
+    pub name: String,
+    /// Print JSON instead of a table of the largest terms
+    #[arg(long)]
+    pub json: bool,
+    /// Also evaluate the cell at these points (one per line, in the reference frame)
+    #[arg(long, value_name = "FILE")]
+    pub points: Option<PathBuf>,
 }
 
 #[derive(Args, Debug, Clone)]
@@ -120,7 +136,68 @@ pub fn main() -> ExitCode {
             Ok(()) => ExitCode::SUCCESS,
             Err(f) => f.exit(),
         },
+        Command::Cell(args) => match run_cell(&args) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(f) => f.exit(),
+        },
     }
+}
+
+fn run_cell(args: &CellArgs) -> Result<(), Failure> {
+    let manifest = load_manifest(&args.manifest)?;
+    let file = args.manifest.manifest.display().to_string();
+    let Some(cell) = manifest.cells.get(&args.name) else {
+        let names = manifest.cells.keys().map(String::as_str);
+        let help = match latticebuild_geom::spelling::closest(&args.name, names) {
+            Some(s) => format!("  = help: did you mean `{s}`?\n"),
+            None => String::new(),
+        };
+        return Err(Failure::Usage(format!(
+            "error: no cell named `{}` in `{file}`\n{help}",
+            args.name
+        )));
+    };
+    let Some(spec) = &cell.symmetric else {
+        return Err(Failure::Usage(format!(
+            "error: cell `{}` has no `symmetry`, so it has no coefficients to show\n  = help: add `symmetry = \"Oh\"` (or D3, D4, Td) to `[cells.{}]`\n",
+            args.name, args.name
+        )));
+    };
+    let group = crate::stages::symmetric::group_of(&spec.group).map_err(Failure::Build)?;
+    let points = match &args.points {
+        None => Vec::new(),
+        Some(path) => {
+            let text = std::fs::read_to_string(path).map_err(|e| {
+                Failure::Usage(format!("error: cannot read `{}`: {e}\n", path.display()))
+            })?;
+            crate::inspect::read_points(&path.display().to_string(), &text, group.dimension())
+                .map_err(Failure::Usage)?
+        }
+    };
+    let mut graph = compile(&manifest)?;
+    let node = graph
+        .compile_cell(&manifest, &args.name)
+        .map_err(|c| Failure::Usage(format!("error: {c}\n")))?;
+    let cache = open_cache(&manifest.path, true)?;
+    let sink = OutputDir {
+        dir: manifest.out_dir.clone(),
+    };
+    let payload = Builder::new(&graph, &cache, &sink, &NoProgress)
+        .build_node(node)
+        .map_err(|e| Failure::Build(e.to_string()))?;
+    let fitted =
+        crate::stages::symmetric::FittedPayload::from_bytes(&payload).map_err(Failure::Build)?;
+    let report =
+        crate::inspect::report(&args.name, &fitted, &group, &points).map_err(Failure::Build)?;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).expect("cell report serializes")
+        );
+    } else {
+        print!("{}", crate::inspect::table(&report, 20));
+    }
+    Ok(())
 }
 
 fn set_jobs(jobs: Option<usize>) -> Result<(), Failure> {

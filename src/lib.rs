@@ -7,6 +7,7 @@ pub mod cli;
 pub mod diagnostics;
 pub mod files;
 pub mod graph;
+pub mod inspect;
 pub mod manifest;
 pub mod progress;
 pub mod report;

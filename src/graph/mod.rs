@@ -10,8 +10,9 @@ pub mod status;
 
 use std::collections::BTreeMap;
 
-use crate::manifest::Manifest;
+use crate::manifest::{CellSource, FitResolution, Manifest};
 use crate::stages::Stage;
+use crate::stages::symmetric::{Combination, CombineStage, ConstrainStage, FitStage, SampleStage};
 
 /// Index of a node in [`Graph::nodes`].
 pub type NodeId = usize;
@@ -32,29 +33,121 @@ pub struct Graph {
     pub outputs: BTreeMap<String, NodeId>,
 }
 
+/// Compiles cells into nodes once each, following blends and Minkowski combinations.
+struct CellCompiler<'m> {
+    manifest: &'m Manifest,
+    /// Node id by node name, so a cell used twice is compiled once.
+    done: BTreeMap<String, NodeId>,
+    /// The cells being compiled, innermost last, to report a reference cycle as a path.
+    visiting: Vec<String>,
+}
+
+impl CellCompiler<'_> {
+    fn node(&mut self, graph: &mut Graph, name: &str) -> Result<NodeId, Cycle> {
+        let cell = &self.manifest.cells[name];
+        let final_name = match cell.symmetric {
+            None => format!("cell:{name}"),
+            Some(_) => format!("constrain:{name}"),
+        };
+        if let Some(&id) = self.done.get(&final_name) {
+            return Ok(id);
+        }
+        if let Some(at) = self.visiting.iter().position(|v| v == name) {
+            let mut path: Vec<String> = self.visiting[at..]
+                .iter()
+                .map(|v| format!("cell:{v}"))
+                .collect();
+            path.push(format!("cell:{name}"));
+            return Err(Cycle(path));
+        }
+        self.visiting.push(name.to_string());
+        let id = self.compile(graph, name)?;
+        self.visiting.pop();
+        self.done.insert(final_name, id);
+        Ok(id)
+    }
+
+    fn compile(&mut self, graph: &mut Graph, name: &str) -> Result<NodeId, Cycle> {
+        let cell = &self.manifest.cells[name];
+        let Some(spec) = &cell.symmetric else {
+            return Ok(graph.push(format!("cell:{name}"), Stage::cell(cell), vec![]));
+        };
+        let fitted = match &cell.source {
+            CellSource::Tpms(_) | CellSource::Expr(_) => {
+                let formula = graph.push(format!("cell:{name}"), Stage::cell(cell), vec![]);
+                let fit = Stage::Fit(FitStage { spec: spec.clone() });
+                match spec.n {
+                    FitResolution::Fixed(n) => {
+                        let sample = Stage::Sample(SampleStage {
+                            spec: spec.clone(),
+                            n,
+                        });
+                        let samples = graph.push(format!("sample:{name}"), sample, vec![formula]);
+                        graph.push(format!("fit:{name}"), fit, vec![samples])
+                    }
+                    FitResolution::Auto { .. } => {
+                        graph.push(format!("fit:{name}"), fit, vec![formula])
+                    }
+                }
+            }
+            CellSource::Blend { cells, weights } => {
+                let inputs = cells
+                    .iter()
+                    .map(|c| self.node(graph, c))
+                    .collect::<Result<Vec<_>, _>>()?;
+                let combination = Combination::Blend {
+                    weights: weights.clone(),
+                };
+                let stage = Stage::Combine(CombineStage {
+                    spec: spec.clone(),
+                    combination,
+                });
+                graph.push(format!("blend:{name}"), stage, inputs)
+            }
+            CellSource::Minkowski { op, cells } => {
+                let inputs = cells
+                    .iter()
+                    .map(|c| self.node(graph, c))
+                    .collect::<Result<Vec<_>, _>>()?;
+                let n = match spec.n {
+                    FitResolution::Fixed(n) => n,
+                    FitResolution::Auto { .. } => 128,
+                };
+                let combination = Combination::Minkowski { op: *op, n };
+                let stage = Stage::Combine(CombineStage {
+                    spec: spec.clone(),
+                    combination,
+                });
+                graph.push(format!("minkowski:{name}"), stage, inputs)
+            }
+        };
+        let constrain = Stage::Constrain(ConstrainStage { spec: spec.clone() });
+        Ok(graph.push(format!("constrain:{name}"), constrain, vec![fitted]))
+    }
+}
+
 /// A dependency cycle, as the path of node names that closes it.
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
 #[error("dependency cycle: {}", .0.join(" → "))]
 pub struct Cycle(pub Vec<String>);
 
 impl Graph {
-    /// Compiles the manifest: one `cell` node per cell used by an output, and a `contour` and
-    /// a `write` node per output.
+    /// Compiles the manifest: the nodes of every cell an output uses (a `cell` node for plain
+    /// cells; `cell → sample → fit → constrain`, or `blend`/`minkowski → constrain`, for
+    /// symmetric ones), then a `contour` and a `write` node per output.
     pub fn compile(manifest: &Manifest) -> Result<Graph, Cycle> {
         let mut graph = Graph::default();
-        let mut cell_nodes: BTreeMap<&str, NodeId> = BTreeMap::new();
+        let mut compiler = CellCompiler {
+            manifest,
+            done: BTreeMap::new(),
+            visiting: Vec::new(),
+        };
         for (name, output) in &manifest.outputs {
-            let cell = &manifest.cells[&output.cell];
-            let cell_node = *cell_nodes.entry(output.cell.as_str()).or_insert_with(|| {
-                graph.push(
-                    format!("cell:{}", cell.name.text),
-                    Stage::cell(cell),
-                    vec![],
-                )
-            });
+            let cell_node = compiler.node(&mut graph, &output.cell)?;
+            let fitted = manifest.cells[&output.cell].symmetric.as_ref();
             let contour = graph.push(
                 format!("contour:{name}"),
-                Stage::contour(output),
+                Stage::contour(output, fitted),
                 vec![cell_node],
             );
             let write = graph.push(format!("write:{name}"), Stage::write(output), vec![contour]);
@@ -62,6 +155,20 @@ impl Graph {
         }
         graph.check_order()?;
         Ok(graph)
+    }
+
+    /// The node whose payload is cell `name`'s final field (formula or coefficient table),
+    /// compiling it and what it needs on first use.
+    pub fn compile_cell(&mut self, manifest: &Manifest, name: &str) -> Result<NodeId, Cycle> {
+        let mut compiler = CellCompiler {
+            manifest,
+            done: BTreeMap::new(),
+            visiting: Vec::new(),
+        };
+        for (id, node) in self.nodes.iter().enumerate() {
+            compiler.done.insert(node.name.clone(), id);
+        }
+        compiler.node(self, name)
     }
 
     fn push(&mut self, name: String, stage: Stage, inputs: Vec<NodeId>) -> NodeId {
@@ -118,17 +225,23 @@ impl Graph {
         if !unknown.is_empty() {
             return Err(unknown);
         }
-        let mut wanted = vec![false; self.nodes.len()];
-        let mut stack: Vec<NodeId> = if targets.is_empty() {
+        let roots: Vec<NodeId> = if targets.is_empty() {
             self.outputs.values().copied().collect()
         } else {
             targets.iter().map(|t| self.outputs[t]).collect()
         };
+        Ok(self.closure(&roots))
+    }
+
+    /// `roots` and everything they read, in build order.
+    pub fn closure(&self, roots: &[NodeId]) -> Vec<NodeId> {
+        let mut wanted = vec![false; self.nodes.len()];
+        let mut stack = roots.to_vec();
         while let Some(id) = stack.pop() {
             if !std::mem::replace(&mut wanted[id], true) {
                 stack.extend(&self.nodes[id].inputs);
             }
         }
-        Ok((0..self.nodes.len()).filter(|&id| wanted[id]).collect())
+        (0..self.nodes.len()).filter(|&id| wanted[id]).collect()
     }
 }

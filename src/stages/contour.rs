@@ -7,14 +7,19 @@ use latticebuild_geom::field::{Grid, ScalarField, Solid, SolidSampler};
 use latticebuild_geom::validate;
 
 use super::artifact::{MeshArtifact, MeshSummary};
+use super::symmetric::{FittedPayload, group_of};
 use crate::build::StageProgress;
 use crate::cache::{KeyBuilder, Param};
-use crate::manifest::Output;
+use crate::manifest::{GroupSpec, Output, Symmetric};
 
 pub const VERSION: u32 = 1;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct ContourStage {
+    /// `None`: the input is a formula; `Some`: a fitted cell of this group.
+    pub fitted: Option<GroupSpec>,
+    /// Clip to the cell's reference element instead of repeating it over a box.
+    pub over_element: bool,
     pub domain_min: [f64; 3],
     pub domain_max: [f64; 3],
     pub cell_size: [f64; 3],
@@ -27,8 +32,10 @@ fn vec3(v: [f64; 3]) -> Param {
 }
 
 impl ContourStage {
-    pub fn new(output: &Output) -> ContourStage {
+    pub fn new(output: &Output, fitted: Option<&Symmetric>) -> ContourStage {
         ContourStage {
+            fitted: fitted.map(|s| s.group.clone()),
+            over_element: output.over_element,
             domain_min: output.domain_min,
             domain_max: output.domain_max,
             cell_size: output.cell_size,
@@ -44,7 +51,9 @@ impl ContourStage {
             Solid::Shell { thickness } => ("shell", 0.0, thickness),
             Solid::EccentricShell { offset, thickness } => ("eccentric_shell", offset, thickness),
         };
-        key.param("domain.min", vec3(self.domain_min))
+        key.param("fitted", self.fitted.is_some())
+            .param("over_element", self.over_element)
+            .param("domain.min", vec3(self.domain_min))
             .param("domain.max", vec3(self.domain_max))
             .param("cell_size", vec3(self.cell_size))
             .param("solid", solid)
@@ -67,10 +76,20 @@ impl ContourStage {
         cell_payload: &[u8],
         progress: &dyn StageProgress,
     ) -> Result<MeshArtifact, String> {
-        let formula = std::str::from_utf8(cell_payload)
-            .map_err(|_| "cell payload is not UTF-8".to_string())?;
-        let field = expr::compile(formula)
-            .map_err(|e| format!("cell formula does not compile: {}", e.message))?;
+        let field: Box<dyn ScalarField> = match &self.fitted {
+            None => {
+                let formula = std::str::from_utf8(cell_payload)
+                    .map_err(|_| "cell payload is not UTF-8".to_string())?;
+                Box::new(
+                    expr::compile(formula)
+                        .map_err(|e| format!("cell formula does not compile: {}", e.message))?,
+                )
+            }
+            Some(spec) => {
+                let group = group_of(spec)?;
+                Box::new(FittedPayload::from_bytes(cell_payload)?.cell(&group)?)
+            }
+        };
         let model = Grid::spanning(self.domain_min, self.domain_max, self.samples);
         let cell_grid = model.scaled_down(self.cell_size);
         let sampler = SolidSampler {

@@ -11,11 +11,17 @@
 //! |-----------|---------------------------------------------------------|----------------|---------|
 //! | `cell`    | source kind, TPMS name or expression text               | —              | canonical formula text |
 //! | `contour` | domain, cell size, solid, offset, thickness, samples   | cell payload   | mesh + its check ([`artifact`]) |
+//! | `sample`  | group, N, mirror, symmetrize                            | cell payload   | `N^d` samples of the sampling domain |
+//! | `fit`     | group, N (or tolerance, mirror, symmetrize for `auto`)  | samples (or cell payload for `auto`) | coefficient table (JSON) |
+//! | `blend`   | group, weights                                          | member coefficient tables | coefficient table |
+//! | `minkowski` | group, op, N                                          | two coefficient tables | coefficient table |
+//! | `constrain` | group, normal_to_faces, offset, invert                | coefficient table | coefficient table + constraint report |
 //! | `write`   | formats, encoding, path stem                            | contour payload| files written and the mesh summary (JSON) |
 
 pub mod artifact;
 pub mod cell;
 pub mod contour;
+pub mod symmetric;
 pub mod write;
 
 use crate::cache::{ContentHash, Key, KeyBuilder, KeyDescription, KeyError};
@@ -28,6 +34,10 @@ pub use write::OutputSink;
 #[derive(Clone, Debug, PartialEq)]
 pub enum Stage {
     Cell(cell::CellStage),
+    Sample(symmetric::SampleStage),
+    Fit(symmetric::FitStage),
+    Combine(symmetric::CombineStage),
+    Constrain(symmetric::ConstrainStage),
     Contour(contour::ContourStage),
     Write(write::WriteStage),
 }
@@ -37,8 +47,9 @@ impl Stage {
         Stage::Cell(cell::CellStage::new(cell))
     }
 
-    pub fn contour(output: &Output) -> Stage {
-        Stage::Contour(contour::ContourStage::new(output))
+    /// The contour of `output`, reading a formula (`fitted == false`) or a fitted cell.
+    pub fn contour(output: &Output, fitted: Option<&crate::manifest::Symmetric>) -> Stage {
+        Stage::Contour(contour::ContourStage::new(output, fitted))
     }
 
     pub fn write(output: &Output) -> Stage {
@@ -48,6 +59,10 @@ impl Stage {
     pub fn kind(&self) -> &'static str {
         match self {
             Stage::Cell(_) => "cell",
+            Stage::Sample(_) => "sample",
+            Stage::Fit(_) => "fit",
+            Stage::Combine(s) => s.kind(),
+            Stage::Constrain(_) => "constrain",
             Stage::Contour(_) => "contour",
             Stage::Write(_) => "write",
         }
@@ -57,6 +72,9 @@ impl Stage {
     pub fn version(&self) -> u32 {
         match self {
             Stage::Cell(_) => cell::VERSION,
+            Stage::Sample(_) | Stage::Fit(_) | Stage::Combine(_) | Stage::Constrain(_) => {
+                symmetric::VERSION
+            }
             Stage::Contour(_) => contour::VERSION,
             Stage::Write(_) => write::VERSION,
         }
@@ -67,24 +85,31 @@ impl Stage {
         let builder = KeyBuilder::new(self.kind(), self.version());
         let builder = match self {
             Stage::Cell(s) => s.key_params(builder),
+            Stage::Sample(s) => s.key_params(builder),
+            Stage::Fit(s) => s.key_params(builder),
+            Stage::Combine(s) => s.key_params(builder),
+            Stage::Constrain(s) => s.key_params(builder),
             Stage::Contour(s) => s.key_params(builder),
             Stage::Write(s) => s.key_params(builder),
         };
-        debug_assert_eq!(inputs.len(), self.input_names().len());
-        let builder = self
-            .input_names()
+        let builder = inputs
             .iter()
-            .zip(inputs)
-            .fold(builder, |b, (name, hash)| b.input(name, *hash));
+            .enumerate()
+            .fold(builder, |b, (i, hash)| b.input(&self.input_name(i), *hash));
         builder.build()
     }
 
-    /// Names of the inputs, in order, as they appear in keys and `-v` explanations.
-    pub fn input_names(&self) -> &'static [&'static str] {
+    /// The name of input `i`, as it appears in keys and `-v` explanations.
+    pub fn input_name(&self, i: usize) -> String {
         match self {
-            Stage::Cell(_) => &[],
-            Stage::Contour(_) => &["cell"],
-            Stage::Write(_) => &["mesh"],
+            Stage::Cell(_) => format!("input {i}"),
+            Stage::Sample(_) => "formula".into(),
+            Stage::Fit(s) if s.reads_samples() => "samples".into(),
+            Stage::Fit(_) => "formula".into(),
+            Stage::Combine(_) => format!("cell {}", i + 1),
+            Stage::Constrain(_) => "fit".into(),
+            Stage::Contour(_) => "cell".into(),
+            Stage::Write(_) => "mesh".into(),
         }
     }
 }

@@ -339,7 +339,7 @@ pub fn fit(
 
 /// Fails with [`FitError::Vanishes`] if the cell's values on its own grid are one-signed or
 /// zero relative to `scale` (the input's magnitude).
-pub(crate) fn check_surface(cell: &FittedCell, scale: f64) -> Result<(), FitError> {
+pub fn check_surface(cell: &FittedCell, scale: f64) -> Result<(), FitError> {
     let g = cell.grid(cell.n)?;
     let (min, max) = g
         .iter()

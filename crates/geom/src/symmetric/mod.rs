@@ -43,7 +43,9 @@ mod sampler;
 pub use blend::{minkowski_difference, minkowski_sum, weighted_average};
 pub use domain::{Extend, FnSource, SampleOptions, Source, from_fn, sample};
 pub use eval::PRUNE_TOLERANCE;
-pub use fit::{Coefficient, FitError, FitOptions, FittedCell, Side, fit, fit_samples};
+pub use fit::{
+    Coefficient, FitError, FitOptions, FittedCell, Side, check_surface, fit, fit_samples,
+};
 pub use group::{
     Domain, Frame, Group, GroupError, IDENTITY, MAX_GROUP_ORDER, Matrix, ReferenceElement,
     TETRAHEDRON_FACE_NORMALS,

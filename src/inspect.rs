@@ -1,0 +1,177 @@
+//! `latticebuild cell MANIFEST NAME`: a fitted cell's coefficients, constraint and values, as
+//! JSON (`--json`) or as a readable table of its largest terms.
+//!
+//! Conventions (METHOD.md): coefficients are `c_f = ⟨g, φ_f⟩` in centred coordinates, with
+//! `f` in skew integer coordinates for D3; points are in the cell's Cartesian reference frame
+//! (centroid at the origin, cell size 1); `value` is Re Φ and `gradient` its Cartesian gradient.
+
+use serde::Serialize;
+
+use latticebuild_geom::symmetric::Group;
+
+use crate::stages::symmetric::FittedPayload;
+
+#[derive(Debug, Serialize)]
+pub struct CellReport {
+    pub name: String,
+    pub group: String,
+    pub n: usize,
+    pub extend: String,
+    pub coefficients: Vec<CoefficientRow>,
+    pub constraint: ConstraintRow,
+    pub values: Vec<ValueRow>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct CoefficientRow {
+    pub f: Vec<i32>,
+    pub re: f64,
+    pub im: f64,
+    pub k: f64,
+}
+
+#[derive(Debug, Serialize)]
+pub struct ConstraintRow {
+    pub applied: bool,
+    pub delta_norm: f64,
+    /// `None` when the constraint was not asked for.
+    pub max_face_residual: Option<f64>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct ValueRow {
+    pub point: Vec<f64>,
+    pub value: f64,
+    pub gradient: Vec<f64>,
+}
+
+/// Reads points, one per line, `dimension` whitespace-separated numbers each; blank lines and
+/// `#` comments are skipped. Errors name the file and line.
+pub fn read_points(file: &str, text: &str, dimension: usize) -> Result<Vec<[f64; 3]>, String> {
+    let mut points = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let numbers: Result<Vec<f64>, _> = line.split_whitespace().map(str::parse::<f64>).collect();
+        match numbers {
+            Ok(v) if v.len() == dimension && v.iter().all(|x| x.is_finite()) => {
+                points.push(std::array::from_fn(|a| v.get(a).copied().unwrap_or(0.0)));
+            }
+            _ => {
+                return Err(format!(
+                    "error: {file}:{}: expected {dimension} finite numbers separated by spaces, found `{line}`\n",
+                    i + 1
+                ));
+            }
+        }
+    }
+    Ok(points)
+}
+
+pub fn report(
+    name: &str,
+    payload: &FittedPayload,
+    group: &Group,
+    points: &[[f64; 3]],
+) -> Result<CellReport, String> {
+    let cell = payload.cell(group)?;
+    let d = group.dimension();
+    let coefficients = cell
+        .coefficients()
+        .iter()
+        .map(|c| CoefficientRow {
+            f: c.f[..d].to_vec(),
+            re: c.c.re,
+            im: c.c.im,
+            k: c.k_f,
+        })
+        .collect();
+    let values = points
+        .iter()
+        .map(|&p| {
+            let (value, gradient) = cell.value_gradient(p);
+            ValueRow {
+                point: p[..d].to_vec(),
+                value,
+                gradient: gradient[..d].to_vec(),
+            }
+        })
+        .collect();
+    let constraint = match &payload.constraint {
+        Some(c) => ConstraintRow {
+            applied: c.applied,
+            delta_norm: c.delta_norm,
+            max_face_residual: Some(c.max_face_residual),
+        },
+        None => ConstraintRow {
+            applied: false,
+            delta_norm: 0.0,
+            max_face_residual: None,
+        },
+    };
+    Ok(CellReport {
+        name: name.to_string(),
+        group: payload.group.clone(),
+        n: payload.n,
+        extend: payload.extend.clone(),
+        coefficients,
+        constraint,
+        values,
+    })
+}
+
+/// The largest terms first, then the constraint and the values.
+pub fn table(report: &CellReport, largest: usize) -> String {
+    let mut rows: Vec<&CoefficientRow> = report.coefficients.iter().collect();
+    rows.sort_by(|a, b| b.re.hypot(b.im).total_cmp(&a.re.hypot(a.im)));
+    let mut s = format!(
+        "cell `{}`: group {}, N = {}, extend {}, {} coefficients\n\n{:>16}  {:>14}  {:>14}  {:>12}\n",
+        report.name,
+        report.group,
+        report.n,
+        report.extend,
+        report.coefficients.len(),
+        "f",
+        "re",
+        "im",
+        "K_f"
+    );
+    for row in rows.iter().take(largest) {
+        let f: Vec<String> = row.f.iter().map(i32::to_string).collect();
+        s.push_str(&format!(
+            "{:>16}  {:>14.6e}  {:>14.6e}  {:>12.6e}\n",
+            format!("({})", f.join(", ")),
+            row.re,
+            row.im,
+            row.k
+        ));
+    }
+    if rows.len() > largest {
+        s.push_str(&format!(
+            "{:>16}\n",
+            format!("… {} more", rows.len() - largest)
+        ));
+    }
+    match report.constraint.max_face_residual {
+        Some(r) => s.push_str(&format!(
+            "\nnormal_to_faces: {}, ‖Δc‖ = {:.3e}, max |∇Φ·n| on the faces = {:.3e}\n",
+            if report.constraint.applied {
+                "applied"
+            } else {
+                "already held"
+            },
+            report.constraint.delta_norm,
+            r
+        )),
+        None => s.push_str("\nnormal_to_faces: not asked for\n"),
+    }
+    for v in &report.values {
+        s.push_str(&format!(
+            "Φ({:?}) = {:.12e}, ∇Φ = {:?}\n",
+            v.point, v.value, v.gradient
+        ));
+    }
+    s
+}

@@ -1,0 +1,343 @@
+//! The stages of symmetric Fourier cells (METHOD.md): `sample` → `fit` → `constrain`, and the
+//! combinations `blend` and `minkowski`.
+//!
+//! Payloads: `sample` stores the raw samples (`LBSAMP01`, N and dimension, then `N^d` f64);
+//! every other stage stores a [`FittedPayload`] as JSON, whose floats serde_json writes in
+//! shortest round-trip form, so a coefficient table reloads bit for bit.
+//!
+//! Invariants: the group in a payload is the one the manifest asked for; coefficients are
+//! representatives of their orbits inside the band of `n` (checked again on load by
+//! `FittedCell::from_coefficients`).
+
+use serde::{Deserialize, Serialize};
+
+use latticebuild_geom::expr;
+use latticebuild_geom::symmetric::{
+    self, Complex64, Extend, FitOptions, FittedCell, Group, SampleOptions, Side, check_surface,
+    fit_samples, minkowski_difference, minkowski_sum, weighted_average,
+};
+
+use crate::cache::{KeyBuilder, Param};
+use crate::manifest::{FitResolution, GroupSpec, MinkowskiOp, Symmetric};
+
+pub const VERSION: u32 = 1;
+
+const SAMPLES_MAGIC: &[u8; 8] = b"LBSAMP01";
+
+/// The group of a manifest's group spec.
+pub fn group_of(spec: &GroupSpec) -> Result<Group, String> {
+    match spec {
+        GroupSpec::Named(name) => Group::by_name(name).map_err(|e| e.to_string()),
+        GroupSpec::Generators {
+            dimension,
+            generators,
+        } => Group::from_generators(*dimension, generators).map_err(|e| e.to_string()),
+    }
+}
+
+fn group_param(spec: &GroupSpec) -> Param {
+    match spec {
+        GroupSpec::Named(name) => Param::Str(name.clone()),
+        GroupSpec::Generators {
+            dimension,
+            generators,
+        } => {
+            let mut items = vec![Param::U64(*dimension as u64)];
+            items.extend(
+                generators
+                    .iter()
+                    .flatten()
+                    .flatten()
+                    .map(|&v| Param::I64(i64::from(v))),
+            );
+            Param::List(items)
+        }
+    }
+}
+
+fn sample_options(spec: &Symmetric) -> SampleOptions {
+    SampleOptions {
+        extend: if spec.mirror {
+            Extend::Mirror
+        } else {
+            Extend::None
+        },
+        symmetrize: spec.symmetrize,
+    }
+}
+
+/// What `constrain` did, for `latticebuild cell` and the report.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ConstraintSummary {
+    pub applied: bool,
+    pub delta_norm: f64,
+    pub max_face_residual: f64,
+}
+
+/// A fitted cell as stored in the cache.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FittedPayload {
+    /// Canonical group name, or `generators` for a group given by generators.
+    pub group: String,
+    pub n: usize,
+    /// Whether D3/Td cells were extended by mirroring (reported by `latticebuild cell`).
+    pub extend: String,
+    /// `[fx, fy, fz, re, im]` per representative frequency, sorted by frequency.
+    pub coefficients: Vec<(i32, i32, i32, f64, f64)>,
+    pub constraint: Option<ConstraintSummary>,
+}
+
+impl FittedPayload {
+    pub fn new(cell: &FittedCell, spec: &Symmetric, constraint: Option<ConstraintSummary>) -> Self {
+        FittedPayload {
+            group: cell.group().name().to_string(),
+            n: cell.n(),
+            extend: if spec.mirror { "mirror" } else { "none" }.to_string(),
+            coefficients: cell
+                .coefficients()
+                .iter()
+                .map(|c| (c.f[0], c.f[1], c.f[2], c.c.re, c.c.im))
+                .collect(),
+            constraint,
+        }
+    }
+
+    pub fn to_bytes(&self) -> Vec<u8> {
+        serde_json::to_vec(self).expect("fitted payload serializes")
+    }
+
+    pub fn from_bytes(bytes: &[u8]) -> Result<FittedPayload, String> {
+        serde_json::from_slice(bytes).map_err(|e| format!("malformed fitted cell payload: {e}"))
+    }
+
+    /// The cell, rebuilt on `group` (which the payload's coefficients were fitted with).
+    pub fn cell(&self, group: &Group) -> Result<FittedCell, String> {
+        FittedCell::from_coefficients(
+            group.clone(),
+            self.n,
+            self.coefficients
+                .iter()
+                .map(|&(a, b, c, re, im)| ([a, b, c], Complex64::new(re, im))),
+        )
+        .map_err(|e| e.to_string())
+    }
+}
+
+/// `sample`: the source evaluated on the `N^d` grid of the group's sampling domain.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SampleStage {
+    pub spec: Symmetric,
+    pub n: usize,
+}
+
+impl SampleStage {
+    pub fn key_params(&self, key: KeyBuilder) -> KeyBuilder {
+        key.param("group", group_param(&self.spec.group))
+            .param("n", self.n as u64)
+            .param("mirror", self.spec.mirror)
+            .param("symmetrize", self.spec.symmetrize)
+    }
+
+    pub fn run(&self, formula: &[u8]) -> Result<Vec<u8>, String> {
+        let group = group_of(&self.spec.group)?;
+        let field = compile_formula(formula)?;
+        let samples = symmetric::sample(&group, self.n, &field, sample_options(&self.spec))
+            .map_err(|e| e.to_string())?;
+        let (min, max) = samples
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
+        if min >= 0.0 || max <= 0.0 {
+            let side = if max <= 0.0 {
+                Side::Inside
+            } else {
+                Side::Outside
+            };
+            return Err(symmetric::FitError::EmptyInput { side }.to_string());
+        }
+        let mut out = Vec::with_capacity(24 + samples.len() * 8);
+        out.extend_from_slice(SAMPLES_MAGIC);
+        out.extend_from_slice(&(self.n as u64).to_le_bytes());
+        out.extend_from_slice(&(group.dimension() as u64).to_le_bytes());
+        out.extend_from_slice(bytemuck::cast_slice(&samples));
+        Ok(out)
+    }
+}
+
+fn compile_formula(formula: &[u8]) -> Result<expr::CompiledExpr, String> {
+    let text = std::str::from_utf8(formula).map_err(|_| "cell formula is not UTF-8".to_string())?;
+    expr::compile(text).map_err(|e| format!("cell formula does not compile: {}", e.message))
+}
+
+fn decode_samples(payload: &[u8]) -> Result<(usize, Vec<f64>), String> {
+    let bad = || "malformed samples payload".to_string();
+    if payload.get(..8) != Some(SAMPLES_MAGIC.as_slice())
+        || payload.len() < 24
+        || (payload.len() - 24) % 8 != 0
+    {
+        return Err(bad());
+    }
+    let n = u64::from_le_bytes(payload[8..16].try_into().map_err(|_| bad())?) as usize;
+    Ok((n, bytemuck::pod_collect_to_vec(&payload[24..])))
+}
+
+/// `fit`: coefficients from the samples (fixed N) or from the source (`n = "auto"`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FitStage {
+    pub spec: Symmetric,
+}
+
+impl FitStage {
+    pub fn key_params(&self, key: KeyBuilder) -> KeyBuilder {
+        let key = key.param("group", group_param(&self.spec.group));
+        match self.spec.n {
+            FitResolution::Fixed(n) => key.param("n", n as u64),
+            FitResolution::Auto { tolerance } => key
+                .param("tolerance", tolerance)
+                .param("mirror", self.spec.mirror)
+                .param("symmetrize", self.spec.symmetrize),
+        }
+    }
+
+    /// Whether the input is the sample payload (fixed N) or the cell's formula (auto N).
+    pub fn reads_samples(&self) -> bool {
+        matches!(self.spec.n, FitResolution::Fixed(_))
+    }
+
+    pub fn run(&self, input: &[u8]) -> Result<Vec<u8>, String> {
+        let group = group_of(&self.spec.group)?;
+        let cell = match self.spec.n {
+            FitResolution::Fixed(_) => {
+                let (n, samples) = decode_samples(input)?;
+                let scale = samples.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                let cell = fit_samples(&group, n, &samples).map_err(|e| e.to_string())?;
+                check_surface(&cell, scale).map_err(|e| e.to_string())?;
+                cell
+            }
+            FitResolution::Auto { tolerance } => {
+                let field = compile_formula(input)?;
+                let options = FitOptions {
+                    sample: sample_options(&self.spec),
+                    check_vanishing: true,
+                };
+                symmetric::fit_auto(&group, &field, &options, tolerance, max_n(&group))
+                    .map_err(|e| e.to_string())?
+                    .0
+            }
+        };
+        Ok(FittedPayload::new(&cell, &self.spec, None).to_bytes())
+    }
+}
+
+fn max_n(group: &Group) -> usize {
+    if group.dimension() == 3 { 256 } else { 4096 }
+}
+
+/// `blend` and `minkowski`: combinations of fitted cells of one group.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CombineStage {
+    pub spec: Symmetric,
+    pub combination: Combination,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Combination {
+    Blend { weights: Vec<f64> },
+    Minkowski { op: MinkowskiOp, n: usize },
+}
+
+impl CombineStage {
+    pub fn kind(&self) -> &'static str {
+        match self.combination {
+            Combination::Blend { .. } => "blend",
+            Combination::Minkowski { .. } => "minkowski",
+        }
+    }
+
+    pub fn key_params(&self, key: KeyBuilder) -> KeyBuilder {
+        let key = key.param("group", group_param(&self.spec.group));
+        match &self.combination {
+            Combination::Blend { weights } => key.param(
+                "weights",
+                Param::List(weights.iter().map(|&w| Param::F64(w)).collect()),
+            ),
+            Combination::Minkowski { op, n } => key
+                .param(
+                    "op",
+                    if *op == MinkowskiOp::Sum {
+                        "sum"
+                    } else {
+                        "difference"
+                    },
+                )
+                .param("n", *n as u64),
+        }
+    }
+
+    pub fn run(&self, inputs: &[&[u8]]) -> Result<Vec<u8>, String> {
+        let group = group_of(&self.spec.group)?;
+        let cells: Vec<FittedCell> = inputs
+            .iter()
+            .map(|bytes| FittedPayload::from_bytes(bytes)?.cell(&group))
+            .collect::<Result<_, _>>()?;
+        let combined = match &self.combination {
+            Combination::Blend { weights } => {
+                let pairs: Vec<(&FittedCell, f64)> =
+                    cells.iter().zip(weights.iter().copied()).collect();
+                weighted_average(&pairs)
+            }
+            Combination::Minkowski {
+                op: MinkowskiOp::Sum,
+                n,
+            } => minkowski_sum(&cells[0], &cells[1], *n),
+            Combination::Minkowski {
+                op: MinkowskiOp::Difference,
+                n,
+            } => minkowski_difference(&cells[0], &cells[1], *n),
+        }
+        .map_err(|e| e.to_string())?;
+        Ok(FittedPayload::new(&combined, &self.spec, None).to_bytes())
+    }
+}
+
+/// `constrain`: the face-normal condition (METHOD.md §6), then offset and inversion.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConstrainStage {
+    pub spec: Symmetric,
+}
+
+impl ConstrainStage {
+    pub fn key_params(&self, key: KeyBuilder) -> KeyBuilder {
+        key.param("group", group_param(&self.spec.group))
+            .param("normal_to_faces", self.spec.normal_to_faces)
+            .param("offset", self.spec.offset)
+            .param("invert", self.spec.invert)
+    }
+
+    pub fn run(&self, input: &[u8]) -> Result<Vec<u8>, String> {
+        let group = group_of(&self.spec.group)?;
+        let mut cell = FittedPayload::from_bytes(input)?.cell(&group)?;
+        let constraint = if self.spec.normal_to_faces {
+            let (constrained, report) = cell
+                .constrain_normal_to_faces()
+                .map_err(|e| e.to_string())?;
+            cell = constrained;
+            Some(ConstraintSummary {
+                applied: report.applied,
+                delta_norm: report.delta_norm,
+                max_face_residual: report.max_face_residual,
+            })
+        } else {
+            None
+        };
+        // Dilation grows the solid {Φ ≤ 0}: Φ − offset.
+        if self.spec.offset != 0.0 {
+            cell = cell.offset(-self.spec.offset);
+        }
+        if self.spec.invert {
+            cell = cell.negated();
+        }
+        Ok(FittedPayload::new(&cell, &self.spec, constraint).to_bytes())
+    }
+}
