@@ -79,6 +79,30 @@ error: could not load `lattice.toml` due to 3 previous errors
 ",
     },
     ErrCase {
+        name: "a 3D generator in a 2D group, and a tolerance with a fixed n",
+        manifest: "[cells.a]\nexpr = \"x\"\nsymmetry = { generators = [[[0, -1, 0], [1, 0, 0], [0, 0, -1]]], dimension = 2 }\nfit = { n = 64, tolerance = 1e-3 }\n",
+        sets: &[],
+        expected: "\
+error: a 3D matrix in the 2D group of `cells.a.symmetry`
+ --> lattice.toml:3:28
+  |
+3 | symmetry = { generators = [[[0, -1, 0], [1, 0, 0], [0, 0, -1]]], dimension = 2 }
+  |                            ^^^^^^^^^^^^^^^^^^^^^^^^^^^^^^^^^^^ outside the upper-left 2×2 block it must equal the identity
+  |
+  = help: write 2×2 matrices for `dimension = 2`
+
+error: `cells.a.fit.tolerance` applies only to `n = \"auto\"`
+ --> lattice.toml:4:17
+  |
+4 | fit = { n = 64, tolerance = 1e-3 }
+  |                 ^^^^^^^^^ `n` is fixed at `64`
+  |
+  = help: remove `tolerance`, or set `n = \"auto\"`
+
+error: could not load `lattice.toml` due to 2 previous errors
+",
+    },
+    ErrCase {
         name: "odd and too large fit resolutions",
         manifest: "[cells.a]\ntpms = \"p\"\nsymmetry = \"Oh\"\nfit = { n = 63 }\n\n[cells.b]\ntpms = \"p\"\nsymmetry = \"Oh\"\nfit = { n = 1024 }\n\n[cells.c]\nexpr = \"x\"\nsymmetry = \"D4\"\nfit = { n = \"atuo\" }\n",
         sets: &[],
@@ -634,4 +658,27 @@ samples = 8
             );
         }
     }
+}
+
+/// The symmetric example in the user's reference must stay a valid manifest.
+#[test]
+fn symmetric_reference_example_is_valid() {
+    let doc = include_str!("../../docs/manifest.md");
+    let example = doc
+        .split("## Symmetric cells")
+        .nth(1)
+        .and_then(|rest| rest.split("```toml\n").nth(1))
+        .and_then(|rest| rest.split("```").next())
+        .unwrap_or_default();
+    let manifest = parse_ok(example, &[]);
+    let group = |name: &str| {
+        manifest.cells[name]
+            .symmetric
+            .as_ref()
+            .map(|s| s.group.clone())
+    };
+    assert_eq!(group("mix"), Some(named("Oh")));
+    assert_eq!(group("thick"), Some(named("Oh")));
+    assert_eq!(group("triangle"), Some(named("D3")));
+    assert_eq!(manifest.cells.len(), 8);
 }
