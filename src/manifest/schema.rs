@@ -5,8 +5,9 @@
 //!   cell skipped, and the walk goes on. A [`Manifest`] is built only when nothing was reported.
 //! - Each error cites the most specific span: the value for a bad value, the key for an unknown
 //!   key or a bad name, the table header for a missing key.
-//! - No IO and no geometry: the only facts used beyond the tree are the TPMS library's names
-//!   and the format names.
+//! - No IO and no geometry: the only facts used beyond the tree are the TPMS library's names,
+//!   the format names, the expression parser, and the closure of symmetry groups (for
+//!   generators, and for comparing the groups of combined cells; see `symmetry.rs`).
 //! - The key lists below are the schema's single source of truth: unknown-key detection,
 //!   suggestions and `--set` typing ([`expects_string`]) all read them.
 
