@@ -5,8 +5,9 @@
 //!   cell skipped, and the walk goes on. A [`Manifest`] is built only when nothing was reported.
 //! - Each error cites the most specific span: the value for a bad value, the key for an unknown
 //!   key or a bad name, the table header for a missing key.
-//! - No IO and no geometry: the only facts used beyond the tree are the TPMS library's names
-//!   and the format names.
+//! - No IO and no geometry: the only facts used beyond the tree are the TPMS library's names,
+//!   the format names, the expression parser, and the closure of symmetry groups (for
+//!   generators, and for comparing the groups of combined cells; see `symmetry.rs`).
 //! - The key lists below are the schema's single source of truth: unknown-key detection,
 //!   suggestions and `--set` typing ([`expects_string`]) all read them.
 
@@ -21,18 +22,34 @@ use toml::Spanned;
 use toml::de::{DeString, DeTable, DeValue};
 
 use super::expression;
-use super::model::{Cell, CellSource, Manifest, Name, Output};
+use super::model::{Cell, Manifest, Name, Output};
 use super::source::Report;
 use crate::diagnostics::Diagnostic;
+
+#[path = "symmetry.rs"]
+mod symmetry;
 
 type Key<'i> = Spanned<DeString<'i>>;
 type Value<'i> = Spanned<DeValue<'i>>;
 
 const TOP_KEYS: [&str; 3] = ["build", "cells", "outputs"];
 const BUILD_KEYS: [&str; 1] = ["out_dir"];
-const CELL_KEYS: [&str; 2] = ["tpms", "expr"];
-const OUTPUT_KEYS: [&str; 11] = [
+const CELL_KEYS: [&str; 11] = [
+    "tpms",
+    "expr",
+    "blend",
+    "minkowski",
+    "symmetry",
+    "fit",
+    "extend",
+    "symmetrize",
+    "normal_to_faces",
+    "offset",
+    "invert",
+];
+const OUTPUT_KEYS: [&str; 12] = [
     "cell",
+    "over",
     "domain",
     "cell_size",
     "solid",
@@ -61,8 +78,8 @@ pub(crate) fn expects_string(path: &[&str]) -> bool {
     matches!(
         path,
         ["build", "out_dir"]
-            | ["cells", _, "tpms" | "expr"]
-            | ["outputs", _, "cell" | "solid" | "path"]
+            | ["cells", _, "tpms" | "expr" | "extend"]
+            | ["outputs", _, "cell" | "over" | "solid" | "path"]
     )
 }
 
@@ -117,15 +134,14 @@ pub(crate) fn validate(
         .flat_map(|t| t.keys())
         .map(|k| k.get_ref().as_ref())
         .collect();
-    let mut cells = BTreeMap::new();
+    let mut drafts = Vec::new();
     for (key, value) in cells_table.into_iter().flatten() {
-        if let Some(cell) = checker.cell(key, value) {
-            cells.insert(cell.name.text.clone(), cell);
-        }
+        drafts.extend(checker.cell(key, value, &cell_names));
     }
+    let cells = checker.resolve(drafts);
     let mut outputs = BTreeMap::new();
     for (key, value) in outputs_table.into_iter().flatten() {
-        if let Some(output) = checker.output(key, value, &cell_names) {
+        if let Some(output) = checker.output(key, value, &cell_names, &cells) {
             outputs.insert(output.name.text.clone(), output);
         }
     }
@@ -200,57 +216,12 @@ impl Checker<'_, '_, '_> {
         Some(dir.to_string())
     }
 
-    fn cell(&mut self, key: &Key<'_>, value: &Value<'_>) -> Option<Cell> {
-        let before = self.report.len();
-        let name = key.get_ref().as_ref();
-        self.check_name("cell", key);
-        let help = format!("define it as a `[cells.{name}]` table");
-        let table = self.table(&format!("cells.{name}"), value, &help)?;
-        let fields = self.fields(table, &CELL_KEYS, &format!("in cell `{name}`"));
-        let tpms = fields.get("tpms").map(|(_, v)| self.tpms_name(name, v));
-        let expr = fields.get("expr").map(|(_, v)| self.expression(name, v));
-        let header = value.span();
-        let source = match (tpms, expr) {
-            (Some(tpms), None) => tpms.map(CellSource::Tpms),
-            (None, Some(expr)) => expr.map(CellSource::Expr),
-            (None, None) if fields.misspelled("tpms") || fields.misspelled("expr") => None,
-            (None, None) => {
-                self.error(
-                    header,
-                    &format!("cell `{name}` has no source"),
-                    "expected `tpms` or `expr`",
-                    Some(
-                        "add `tpms = \"gyroid\"` for a library surface or \
-                         `expr = \"...\"` for a formula in x, y, z",
-                    ),
-                );
-                None
-            }
-            (Some(_), Some(_)) => {
-                self.error(
-                    header,
-                    &format!("cell `{name}` has both `tpms` and `expr`"),
-                    "expected exactly one of them",
-                    Some("remove `tpms` or `expr`"),
-                );
-                None
-            }
-        };
-        if self.report.len() > before {
-            return None;
-        }
-        Some(Cell {
-            name: self.name(key),
-            source: source?,
-            symmetric: None,
-        })
-    }
-
     fn output(
         &mut self,
         key: &Key<'_>,
         value: &Value<'_>,
         cells: &BTreeSet<&str>,
+        valid_cells: &BTreeMap<String, Cell>,
     ) -> Option<Output> {
         let before = self.report.len();
         let name = key.get_ref().as_ref();
@@ -270,8 +241,37 @@ impl Checker<'_, '_, '_> {
             }
             Some((_, v)) => self.cell_reference(&path("cell"), v, cells),
         };
-        let domain = self.domain(name, &header, &within, &fields);
+        // `over = "element"`: the domain is the reference element's box, and one cell fills it.
+        let over = fields
+            .get("over")
+            .map(|(_, v)| (*v, self.over(&path("over"), v)));
+        let domain = match over {
+            None => self.domain(name, &header, &within, &fields),
+            // An invalid `over` may have meant the element: a missing `domain` is not reported.
+            Some((_, None)) => fields
+                .get("domain")
+                .and_then(|_| self.domain(name, &header, &within, &fields)),
+            Some((over, Some(_))) => {
+                for (k, why) in [
+                    ("domain", "the element is the reference cell"),
+                    ("cell_size", "the element is one cell of size 1"),
+                ] {
+                    if let Some((key, _)) = fields.get(k) {
+                        self.error(
+                            key.span(),
+                            &format!("`{}` does not apply with `over = \"element\"`", path(k)),
+                            why,
+                            Some(&format!("remove `{k}`, or remove `over` to fill a box")),
+                        );
+                    }
+                }
+                let cell = cell.as_deref();
+                cell.and_then(|cell| self.element_box(name, over, cell, valid_cells))
+            }
+        };
+        let over_element = over.is_some_and(|(_, element)| element == Some(true));
         let cell_size = match fields.get("cell_size") {
+            _ if over_element => Some([1.0; 3]),
             None => Some([1.0; 3]),
             Some((_, v)) => self.scalar_or_vec3(
                 &path("cell_size"),
@@ -305,7 +305,7 @@ impl Checker<'_, '_, '_> {
         Some(Output {
             name: self.name(key),
             cell: cell?,
-            over_element: false,
+            over_element,
             domain_min,
             domain_max,
             cell_size: cell_size?,
@@ -589,7 +589,8 @@ impl Checker<'_, '_, '_> {
                         );
                         return None;
                     }
-                    counts[axis] = intervals as usize + 1;
+                    // An axis without extent (z of a 2D element) still gets 2 samples.
+                    counts[axis] = (intervals as usize).max(1) + 1;
                 }
                 Some(counts)
             }

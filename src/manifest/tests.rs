@@ -45,7 +45,7 @@ fn without_spans(mut manifest: Manifest) -> Manifest {
 
 // ---- invalid manifests ------------------------------------------------------------------------
 
-struct ErrCase {
+pub(super) struct ErrCase {
     name: &'static str,
     manifest: &'static str,
     sets: &'static [&'static str],
@@ -201,7 +201,7 @@ error: cell `a` has no source
  --> lattice.toml:1:1
   |
 1 | [cells.a]
-  | ^^^^^^^^^ expected `tpms` or `expr`
+  | ^^^^^^^^^ expected `tpms`, `expr`, `blend` or `minkowski`
   |
   = help: add `tpms = \"gyroid\"` for a library surface or `expr = \"...\"` for a formula in x, y, z
 
@@ -835,7 +835,7 @@ error: cell `c` has no source
  --> --set:1:7
   |
 1 | cells.c.shape=1
-  |       ^ expected `tpms` or `expr`
+  |       ^ expected `tpms`, `expr`, `blend` or `minkowski`
   |
   = help: add `tpms = \"gyroid\"` for a library surface or `expr = \"...\"` for a formula in x, y, z
 
@@ -845,7 +845,7 @@ error: unknown key `shape` in cell `c`
 1 | cells.c.shape=1
   |         ^^^^^ unknown key
   |
-  = help: expected one of `tpms`, `expr`
+  = help: expected one of `tpms`, `expr`, `blend`, `minkowski`, `symmetry`, `fit`, `extend`, `symmetrize`, `normal_to_faces`, `offset`, `invert`
 
 error: could not load `lattice.toml` due to 3 previous errors
 ",
@@ -1269,3 +1269,6 @@ fn reference_example_is_valid() {
     assert_eq!(manifest.outputs["wavy-core"].samples, [101; 3]);
     assert_eq!(manifest.outputs["block"].stem, "block");
 }
+
+#[path = "symmetry_tests.rs"]
+mod symmetry_tests;
