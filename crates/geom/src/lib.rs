@@ -10,6 +10,8 @@
 //! - Cell coordinates have period 1 for the TPMS library: `cos(2πx)`, not `cos(x)`.
 
 pub mod contour;
+pub mod contour2d;
+pub mod element;
 pub mod expr;
 pub mod field;
 pub mod mesh;

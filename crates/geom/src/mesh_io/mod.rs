@@ -19,11 +19,14 @@ mod obj;
 mod off;
 mod ply;
 mod stl;
+pub mod svg;
 mod vtk;
 
 use crate::mesh::Mesh;
 use rayon::prelude::*;
 use std::io::{self, Write};
+
+pub use svg::write_svg;
 
 /// Writes `mesh` to `out` in `format`. `encoding` chooses binary or text for STL, PLY and VTK
 /// and is ignored by OBJ and OFF, which are always text.

@@ -1,0 +1,431 @@
+//! Marching squares of a planar field clipped to a 2D reference element.
+//!
+//! Reference elements are those of `shared/docs/METHOD.md` §1, in Cartesian coordinates: the
+//! square `[-½, ½]²` and the equilateral triangle of side 1 with centroid at the origin,
+//! pointing to +y, vertices `(-½, -√3/6)`, `(½, -√3/6)`, `(0, √3/3)`.
+//!
+//! [`contour_planar`] returns the region `{Φ ≤ 0} ∩ element` (negative inside) as a
+//! [`PlanarRegion`]: a triangle mesh in the plane `z = 0` and its boundary loops.
+//!
+//! The face rule is the one the 3D tables use on cube faces (see
+//! [`crate::contour::table`]): in each grid cell the inside part is bounded by segments
+//! separating inside corners from outside ones, and on an ambiguous cell (two inside corners on a
+//! diagonal) each inside corner is cut off on its own. So a cell's inside part is one convex
+//! polygon (fanned from its first vertex) or, when ambiguous, two corner triangles; two cells
+//! sharing a side always agree on it, and a 2D section of a 3D contour matches the caps the 3D
+//! contourer draws.
+//!
+//! Grids, chosen so that the element's sides are exact:
+//! - **Square**: `samples` points per axis spanning the square; its sides are the grid's
+//!   boundary, so the element clips itself and `Φ` is contoured as is.
+//! - **Triangle**: the grid is laid on the triangle's skew lattice (METHOD §1),
+//!   `x = q0 + u e1 + v e2` with `q0 = (-½, -√3/6)`, `e1 = (1, 0)`, `e2 = (½, √3/2)`. Two sides
+//!   are the grid lines `u = 0` and `v = 0`; the third is the zero set of the linear clip
+//!   `c = u + v − 1`, combined with `Φ` as in 3D (the sign of `max(Φ, c)`, with node values
+//!   chosen so that both the field's crossings and the side's are exact away from where they
+//!   meet; see `element::lattice_clip`). The spacing `h = 1 / (N + ⅓)` keeps `c` away from zero at every
+//!   node (crossings of `c` sit a third of the way along their edge) and the grid ends one
+//!   line past the side, where every node is outside. An axis-aligned grid would round off the
+//!   corners; this one reproduces the triangle exactly for a constant-inside field.
+//!
+//! Invariants of the output:
+//! - Triangles are counter-clockwise seen from +z; vertices are shared (an interior edge is used
+//!   by exactly two triangles, in opposite directions), so the mesh is edge-manifold.
+//! - No two vertices coincide: crossings stay 1/256 of an edge away from its ends, as in 3D.
+//! - `positions` holds every vertex in `f64`; `mesh.vertices` are their `f32` roundings (what
+//!   the mesh writers store), so areas are exact to `f64` rounding while the mesh is the crate's
+//!   usual [`Mesh`].
+//! - Every boundary loop point is a vertex (its `positions` entry), and the loops' edges are exactly the mesh edges used by one triangle, directed as in their triangle: the
+//!   region lies on the left, so outer loops run counter-clockwise and holes clockwise.
+//! - Deterministic: a pure function of the arguments, single-threaded.
+//! - NaN samples count as outside.
+
+use crate::element::lattice_clip;
+use crate::mesh::Mesh;
+use std::collections::HashMap;
+
+/// A 2D reference element (METHOD §1), in Cartesian coordinates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Element2 {
+    /// `[-½, ½]²`.
+    Square,
+    /// Equilateral, side 1, centroid at the origin, pointing to +y.
+    Triangle,
+}
+
+const SQRT3: f64 = 1.732_050_807_568_877_2;
+
+/// The triangle's vertices, counter-clockwise from the bottom left.
+const TRIANGLE_VERTICES: [[f64; 2]; 3] = [
+    [-0.5, -SQRT3 / 6.0],
+    [0.5, -SQRT3 / 6.0],
+    [0.0, SQRT3 / 3.0],
+];
+
+impl Element2 {
+    /// A clipping function of the element, negative inside. For the square it is the exact
+    /// signed distance. For the triangle it is the largest signed distance to a side line: exact
+    /// inside and wherever the nearest boundary point lies inside a side, a lower bound of the
+    /// distance elsewhere outside (near the corners).
+    pub fn signed_distance(&self, p: [f64; 2]) -> f64 {
+        match self {
+            Element2::Square => {
+                let q = p.map(|c| c.abs() - 0.5);
+                let outside = q[0].max(0.0).hypot(q[1].max(0.0));
+                outside + q[0].max(q[1]).min(0.0)
+            }
+            Element2::Triangle => {
+                // Unit outward normals of the sides; the inradius is √3/6.
+                let normals = [[0.0, -1.0], [SQRT3 / 2.0, 0.5], [-SQRT3 / 2.0, 0.5]];
+                normals
+                    .iter()
+                    .map(|n| n[0] * p[0] + n[1] * p[1] - SQRT3 / 6.0)
+                    .fold(f64::NEG_INFINITY, f64::max)
+            }
+        }
+    }
+
+    /// Axis-aligned bounding box `(min, max)`.
+    pub fn bbox(&self) -> ([f64; 2], [f64; 2]) {
+        match self {
+            Element2::Square => ([-0.5; 2], [0.5; 2]),
+            Element2::Triangle => ([-0.5, -SQRT3 / 6.0], [0.5, SQRT3 / 3.0]),
+        }
+    }
+
+    /// The element's corners, counter-clockwise (the outline for [`crate::mesh_io::svg`]).
+    pub fn outline(&self) -> Vec<[f64; 2]> {
+        match self {
+            Element2::Square => vec![[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]],
+            Element2::Triangle => TRIANGLE_VERTICES.to_vec(),
+        }
+    }
+
+    /// Area: 1 for the square, √3/4 for the triangle.
+    pub fn area(&self) -> f64 {
+        match self {
+            Element2::Square => 1.0,
+            Element2::Triangle => SQRT3 / 4.0,
+        }
+    }
+}
+
+/// A planar region: its triangulation and its boundary.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PlanarRegion {
+    /// Triangles in `z = 0`, counter-clockwise seen from +z, sharing vertices.
+    pub mesh: Mesh,
+    /// The mesh's vertices in full precision (`mesh.vertices[i]` is `positions[i]` in `f32`).
+    pub positions: Vec<[f64; 2]>,
+    /// Closed loops (last point not repeated), region on the left: outer loops
+    /// counter-clockwise, holes clockwise. Every point is an entry of `positions`.
+    pub boundary: Vec<Vec<[f64; 2]>>,
+}
+
+impl PlanarRegion {
+    /// Sum of the triangle areas, from the full-precision positions.
+    pub fn area(&self) -> f64 {
+        let p = |i: u32| self.positions[i as usize];
+        self.mesh
+            .triangles
+            .iter()
+            .map(|t| {
+                let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
+                0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+            })
+            .sum()
+    }
+}
+
+/// Why a planar field could not be contoured.
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum PlanarError {
+    #[error("the grid needs at least 2 samples per axis, got {0}")]
+    TooFewSamples(usize),
+    #[error("a grid of {0} samples per axis has more vertices than 32-bit indices can address")]
+    TooManySamples(usize),
+}
+
+/// Crossing points are kept this fraction of an edge away from its ends, so no two vertices
+/// coincide even where a sample is exactly zero (same margin as the 3D contourer).
+const EDGE_MARGIN: f64 = 1.0 / 256.0;
+
+/// Contours `{Φ ≤ 0} ∩ element` (see the module docs). `samples` is the number of samples per
+/// axis of the square, or along each side of the triangle (whose grid adds one line of outside
+/// samples); at least 2.
+pub fn contour_planar(
+    field: &(dyn Fn([f64; 2]) -> f64 + Sync),
+    element: Element2,
+    samples: usize,
+) -> Result<PlanarRegion, PlanarError> {
+    if samples < 2 {
+        return Err(PlanarError::TooFewSamples(samples));
+    }
+    // Each node and each grid edge may carry a vertex: about three per node.
+    let n = (samples as u64).saturating_add(1);
+    if n.saturating_mul(n).saturating_mul(3) >= u64::from(u32::MAX) {
+        return Err(PlanarError::TooManySamples(samples));
+    }
+    let lattice = match element {
+        Element2::Square => {
+            let h = 1.0 / (samples - 1) as f64;
+            Lattice {
+                origin: [-0.5, -0.5],
+                axes: [[h, 0.0], [0.0, h]],
+                counts: [samples, samples],
+                clip_triangle: false,
+            }
+        }
+        Element2::Triangle => {
+            let h = 1.0 / ((samples - 1) as f64 + 1.0 / 3.0);
+            Lattice {
+                origin: TRIANGLE_VERTICES[0],
+                axes: [[h, 0.0], [0.5 * h, 0.5 * SQRT3 * h]],
+                counts: [samples + 1, samples + 1],
+                clip_triangle: true,
+            }
+        }
+    };
+    let values = lattice.sample(field);
+    let (mesh, positions) = march(&lattice, &values);
+    let boundary = boundary_loops(&mesh, &positions);
+    Ok(PlanarRegion {
+        mesh,
+        positions,
+        boundary,
+    })
+}
+
+/// A parallelogram grid: node `(i, j)` sits at `origin + i·axes[0] + j·axes[1]`.
+struct Lattice {
+    origin: [f64; 2],
+    axes: [[f64; 2]; 2],
+    counts: [usize; 2],
+    /// Clip by the triangle's third side `u + v ≤ 1`, with `u = i·h`, `v = j·h`.
+    clip_triangle: bool,
+}
+
+impl Lattice {
+    /// Position of the lattice point with fractional indices `(a, b)`.
+    fn point(&self, a: f64, b: f64) -> [f64; 2] {
+        std::array::from_fn(|d| self.origin[d] + a * self.axes[0][d] + b * self.axes[1][d])
+    }
+
+    /// The clipped field at every node, `i` fastest.
+    fn sample(&self, field: &(dyn Fn([f64; 2]) -> f64 + Sync)) -> Vec<f64> {
+        let [nx, ny] = self.counts;
+        // The skew lattice has equal spacing on both axes; `axes[0][0]` is that spacing.
+        let h = self.axes[0][0];
+        let mut values = Vec::with_capacity(nx * ny);
+        for j in 0..ny {
+            for i in 0..nx {
+                let phi = field(self.point(i as f64, j as f64));
+                values.push(if self.clip_triangle {
+                    lattice_clip(phi, i + j, nx - 2, h)
+                } else {
+                    phi
+                });
+            }
+        }
+        values
+    }
+}
+
+/// Where along the edge from value `v0` to `v1` the zero lies, kept off the ends.
+fn crossing(v0: f64, v1: f64) -> f64 {
+    let t = v0 / (v0 - v1);
+    if t.is_finite() {
+        t.clamp(EDGE_MARGIN, 1.0 - EDGE_MARGIN)
+    } else {
+        0.5
+    }
+}
+
+/// Inside test shared by every use: NaN compares false, so it is outside.
+#[inline]
+fn inside(v: f64) -> bool {
+    v < 0.0
+}
+
+/// Vertex ids created on demand: nodes, crossings on x-edges `(i,j)–(i+1,j)` and on y-edges
+/// `(i,j)–(i,j+1)`. A vertex is created once and shared by every cell that uses it.
+struct Vertices<'a> {
+    lattice: &'a Lattice,
+    values: &'a [f64],
+    node: Vec<u32>,
+    x_edge: Vec<u32>,
+    y_edge: Vec<u32>,
+    positions: Vec<[f64; 2]>,
+}
+
+const NONE: u32 = u32::MAX;
+
+impl Vertices<'_> {
+    fn add(&mut self, p: [f64; 2]) -> u32 {
+        self.positions.push(p);
+        (self.positions.len() - 1) as u32
+    }
+
+    fn node(&mut self, i: usize, j: usize) -> u32 {
+        let slot = i + self.lattice.counts[0] * j;
+        if self.node[slot] == NONE {
+            self.node[slot] = self.add(self.lattice.point(i as f64, j as f64));
+        }
+        self.node[slot]
+    }
+
+    fn x_edge(&mut self, i: usize, j: usize) -> u32 {
+        let nx = self.lattice.counts[0];
+        let slot = i + (nx - 1) * j;
+        if self.x_edge[slot] == NONE {
+            let t = crossing(self.values[i + nx * j], self.values[i + 1 + nx * j]);
+            self.x_edge[slot] = self.add(self.lattice.point(i as f64 + t, j as f64));
+        }
+        self.x_edge[slot]
+    }
+
+    fn y_edge(&mut self, i: usize, j: usize) -> u32 {
+        let nx = self.lattice.counts[0];
+        let slot = i + nx * j;
+        if self.y_edge[slot] == NONE {
+            let t = crossing(self.values[i + nx * j], self.values[i + nx * (j + 1)]);
+            self.y_edge[slot] = self.add(self.lattice.point(i as f64, j as f64 + t));
+        }
+        self.y_edge[slot]
+    }
+}
+
+/// An item of a cell's inside polygon: one of its corners, or the crossing on one of its sides.
+#[derive(Clone, Copy)]
+enum Item {
+    Corner(usize),
+    Side(usize),
+}
+
+/// Marching squares with the face rule; triangles counter-clockwise in lattice coordinates,
+/// which the lattice (positive determinant) keeps counter-clockwise in the plane.
+fn march(lattice: &Lattice, values: &[f64]) -> (Mesh, Vec<[f64; 2]>) {
+    let [nx, ny] = lattice.counts;
+    let mut verts = Vertices {
+        lattice,
+        values,
+        node: vec![NONE; nx * ny],
+        x_edge: vec![NONE; (nx - 1) * ny],
+        y_edge: vec![NONE; nx * (ny - 1)],
+        positions: Vec::new(),
+    };
+    let mut triangles = Vec::new();
+    let mut polygon: Vec<Item> = Vec::with_capacity(8);
+    for j in 0..ny - 1 {
+        for i in 0..nx - 1 {
+            // Corners counter-clockwise; side k runs from corner k to corner k + 1.
+            let corners = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)];
+            let ins: [bool; 4] = corners.map(|(a, b)| inside(values[a + nx * b]));
+            if !ins.iter().any(|&b| b) {
+                continue;
+            }
+            let mut id = |item: Item| match item {
+                Item::Corner(k) => verts.node(corners[k].0, corners[k].1),
+                Item::Side(0) => verts.x_edge(i, j),
+                Item::Side(1) => verts.y_edge(i + 1, j),
+                Item::Side(2) => verts.x_edge(i, j + 1),
+                Item::Side(_) => verts.y_edge(i, j),
+            };
+            let crossings = (0..4).filter(|&k| ins[k] != ins[(k + 1) % 4]).count();
+            if crossings == 4 {
+                // Ambiguous cell: the face rule separates the inside corners.
+                for k in (0..4).filter(|&k| ins[k]) {
+                    let tri = [Item::Corner(k), Item::Side(k), Item::Side((k + 3) % 4)];
+                    triangles.push(tri.map(&mut id));
+                }
+                continue;
+            }
+            polygon.clear();
+            for k in 0..4 {
+                if ins[k] {
+                    polygon.push(Item::Corner(k));
+                }
+                if ins[k] != ins[(k + 1) % 4] {
+                    polygon.push(Item::Side(k));
+                }
+            }
+            // One cut line leaves a convex inside part: a fan triangulates it.
+            let ids: Vec<u32> = polygon.iter().map(|&item| id(item)).collect();
+            for k in 1..ids.len() - 1 {
+                triangles.push([ids[0], ids[k], ids[k + 1]]);
+            }
+        }
+    }
+    let vertices = verts
+        .positions
+        .iter()
+        .map(|p| [p[0] as f32, p[1] as f32, 0.0])
+        .collect();
+    (
+        Mesh {
+            vertices,
+            triangles,
+        },
+        verts.positions,
+    )
+}
+
+/// Chains the edges used by one triangle into closed loops, each edge directed as in its
+/// triangle (region on the left). Loops start at the earliest boundary edge in triangle order,
+/// so the result is deterministic.
+fn boundary_loops(mesh: &Mesh, positions: &[[f64; 2]]) -> Vec<Vec<[f64; 2]>> {
+    let mut directed: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+        }
+    }
+    // In triangle order: a boundary edge is one whose reverse no triangle uses.
+    let mut edges: Vec<(u32, u32)> = Vec::new();
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            if !directed.contains_key(&(b, a)) {
+                edges.push((a, b));
+            }
+        }
+    }
+    // Outgoing boundary edges per vertex. The face rule leaves every boundary vertex with one
+    // in and one out; a list keeps the walk well defined even if that ever failed.
+    let mut outgoing: HashMap<u32, Vec<usize>> = HashMap::new();
+    for (e, &(a, _)) in edges.iter().enumerate().rev() {
+        outgoing.entry(a).or_default().push(e);
+    }
+    let mut used = vec![false; edges.len()];
+    let mut loops = Vec::new();
+    for start in 0..edges.len() {
+        if used[start] {
+            continue;
+        }
+        let mut points = Vec::new();
+        let mut e = start;
+        loop {
+            used[e] = true;
+            let (a, b) = edges[e];
+            points.push(positions[a as usize]);
+            let next = outgoing.get_mut(&b).and_then(|list| {
+                while let Some(&candidate) = list.last() {
+                    if used[candidate] {
+                        list.pop();
+                    } else {
+                        return Some(candidate);
+                    }
+                }
+                None
+            });
+            match next {
+                Some(n) => e = n,
+                // Back at the start (its edge is used), or an open chain, which a mesh from
+                // `march` cannot produce: either way the loop ends here.
+                None => break,
+            }
+        }
+        loops.push(points);
+    }
+    loops
+}

@@ -1,0 +1,135 @@
+//! SVG drawing of a planar region inside its element's outline.
+//!
+//! Conventions: the viewBox is the outline's bounding box (the region's, when the outline is
+//! empty) with a margin of 2% of its larger side. SVG's y axis points down, so every y is written
+//! negated and the picture shows +y up. The region is ONE `<path>` holding every boundary loop
+//! (`M … L … Z` per loop) with `fill-rule="evenodd"`, so holes stay empty whatever their
+//! orientation; the outline is a thin unfilled `<polygon>` drawn on top.
+//!
+//! Invariants: the output is a pure function of the input (numbers are printed with a fixed
+//! number of decimals, trailing zeros trimmed and `-0` written `0`); nothing is written when a
+//! coordinate is not finite, which fails with `InvalidInput`.
+
+use crate::contour2d::PlanarRegion;
+use std::fmt::Write as _;
+use std::io::{self, Write};
+
+/// Decimals printed per coordinate: 1e-6 is far below anything visible at any sane size.
+const DECIMALS: usize = 6;
+
+/// Writes `region` and `element_outline` as a standalone SVG document to `out`.
+pub fn write_svg(
+    region: &PlanarRegion,
+    element_outline: &[[f64; 2]],
+    out: &mut dyn Write,
+) -> io::Result<()> {
+    let all_points = || {
+        element_outline
+            .iter()
+            .chain(region.boundary.iter().flatten())
+    };
+    if let Some(p) = all_points().find(|p| !(p[0].is_finite() && p[1].is_finite())) {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("point {p:?} has a non-finite coordinate"),
+        ));
+    }
+    let framed: Vec<&[f64; 2]> = if element_outline.is_empty() {
+        region.boundary.iter().flatten().collect()
+    } else {
+        element_outline.iter().collect()
+    };
+    let (min, max) = bounds(&framed);
+    let size = [max[0] - min[0], max[1] - min[1]];
+    let margin = 0.02 * size[0].max(size[1]);
+    let stroke = 0.005 * size[0].max(size[1]);
+
+    let mut svg = String::new();
+    // Writing to a String cannot fail, so the `fmt::Result`s below are ignored, not unwrapped.
+    let _ = writeln!(
+        svg,
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"{} {} {} {}\">",
+        num(min[0] - margin),
+        num(-max[1] - margin),
+        num(size[0] + 2.0 * margin),
+        num(size[1] + 2.0 * margin),
+    );
+    let mut d = String::new();
+    for lp in &region.boundary {
+        for (k, p) in lp.iter().enumerate() {
+            if !d.is_empty() {
+                d.push(' ');
+            }
+            d.push_str(if k == 0 { "M" } else { "L" });
+            let _ = write!(d, "{},{}", num(p[0]), num(-p[1]));
+        }
+        if !lp.is_empty() {
+            d.push_str(" Z");
+        }
+    }
+    let _ = writeln!(
+        svg,
+        "<path d=\"{d}\" fill=\"#4a7ab5\" fill-rule=\"evenodd\" stroke=\"none\"/>"
+    );
+    let points: Vec<String> = element_outline
+        .iter()
+        .map(|p| format!("{},{}", num(p[0]), num(-p[1])))
+        .collect();
+    let _ = writeln!(
+        svg,
+        "<polygon points=\"{}\" fill=\"none\" stroke=\"black\" stroke-width=\"{}\"/>",
+        points.join(" "),
+        num(stroke),
+    );
+    svg.push_str("</svg>\n");
+    out.write_all(svg.as_bytes())?;
+    out.flush()
+}
+
+/// Bounding box of `points`; the reference square `[-½, ½]²` when there are none, so an empty
+/// drawing still has a valid viewBox.
+fn bounds(points: &[&[f64; 2]]) -> ([f64; 2], [f64; 2]) {
+    if points.is_empty() {
+        return ([-0.5; 2], [0.5; 2]);
+    }
+    let mut min = [f64::INFINITY; 2];
+    let mut max = [f64::NEG_INFINITY; 2];
+    for p in points {
+        for a in 0..2 {
+            min[a] = min[a].min(p[a]);
+            max[a] = max[a].max(p[a]);
+        }
+    }
+    // A degenerate (point or segment) outline would give a zero-size viewBox.
+    for a in 0..2 {
+        if max[a] - min[a] <= 0.0 {
+            min[a] -= 0.5;
+            max[a] += 0.5;
+        }
+    }
+    (min, max)
+}
+
+/// A coordinate with [`DECIMALS`] decimals, trailing zeros trimmed, and no negative zero.
+fn num(x: f64) -> String {
+    let mut s = format!("{x:.DECIMALS$}");
+    if s.contains('.') {
+        let trimmed = s.trim_end_matches('0').trim_end_matches('.').len();
+        s.truncate(trimmed);
+    }
+    if s == "-0" { "0".to_string() } else { s }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::num;
+
+    #[test]
+    fn numbers_are_short_and_deterministic() {
+        assert_eq!(num(0.5), "0.5");
+        assert_eq!(num(-0.0000001), "0");
+        assert_eq!(num(2.0), "2");
+        assert_eq!(num(-1.25), "-1.25");
+        assert_eq!(num(1.0 / 3.0), "0.333333");
+    }
+}

@@ -1,0 +1,286 @@
+//! Planar contouring in the 2D reference elements: exact element areas, closed and oriented
+//! boundary loops that are exactly the mesh's boundary edges, and the SVG drawing.
+
+use latticebuild_geom::contour2d::{Element2, PlanarError, PlanarRegion, contour_planar};
+use latticebuild_geom::mesh_io::write_svg;
+use latticebuild_geom::validate::check;
+use std::collections::{HashMap, HashSet};
+use std::f64::consts::PI;
+
+fn region(f: impl Fn([f64; 2]) -> f64 + Sync, element: Element2, samples: usize) -> PlanarRegion {
+    contour_planar(&f, element, samples).expect("contour")
+}
+
+fn disc(r: f64) -> impl Fn([f64; 2]) -> f64 + Sync {
+    move |p| p[0].hypot(p[1]) - r
+}
+
+fn signed_area(lp: &[[f64; 2]]) -> f64 {
+    (0..lp.len())
+        .map(|k| {
+            let (a, b) = (lp[k], lp[(k + 1) % lp.len()]);
+            0.5 * (a[0] * b[1] - b[0] * a[1])
+        })
+        .sum()
+}
+
+/// Checks the structural invariants and returns the loops' signed areas.
+fn assert_consistent(r: &PlanarRegion, what: &str) -> Vec<f64> {
+    let mesh = &r.mesh;
+    // Planar, counter-clockwise from +z, no degenerate or duplicate vertices, no pinches.
+    assert!(mesh.vertices.iter().all(|v| v[2] == 0.0), "{what}: z != 0");
+    let c = check(mesh);
+    assert!(c.manifold, "{what}: not manifold: {c:?}");
+    let p = |i: u32| mesh.vertices[i as usize].map(f64::from);
+    for t in &mesh.triangles {
+        let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
+        let cross = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        assert!(
+            cross > 0.0,
+            "{what}: triangle {t:?} is not counter-clockwise"
+        );
+    }
+    // Edge uses: every undirected edge once (boundary) or twice in opposite directions.
+    let mut directed: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+        }
+    }
+    let mut mesh_boundary = HashSet::new();
+    for (&(a, b), &n) in &directed {
+        assert_eq!(n, 1, "{what}: directed edge {a}->{b} used {n} times");
+        if !directed.contains_key(&(b, a)) {
+            mesh_boundary.insert((a, b));
+        }
+    }
+    assert_eq!(c.boundary_edges, mesh_boundary.len(), "{what}");
+    // The loops' edges, mapped back to vertex ids by position, are exactly those edges.
+    assert_eq!(r.positions.len(), mesh.vertices.len(), "{what}");
+    for (p, v) in r.positions.iter().zip(&mesh.vertices) {
+        assert_eq!([p[0] as f32, p[1] as f32, 0.0], *v, "{what}: f32 rounding");
+    }
+    let id: HashMap<[u64; 2], u32> = r
+        .positions
+        .iter()
+        .enumerate()
+        .map(|(i, q)| ([q[0].to_bits(), q[1].to_bits()], i as u32))
+        .collect();
+    let key = |q: [f64; 2]| id[&[q[0].to_bits(), q[1].to_bits()]];
+    let mut loop_edges = HashSet::new();
+    for lp in &r.boundary {
+        assert!(lp.len() >= 3, "{what}: loop of {} points", lp.len());
+        for k in 0..lp.len() {
+            let e = (key(lp[k]), key(lp[(k + 1) % lp.len()]));
+            assert!(loop_edges.insert(e), "{what}: edge {e:?} in two loops");
+        }
+    }
+    assert_eq!(
+        loop_edges, mesh_boundary,
+        "{what}: loops and mesh boundary differ"
+    );
+    r.boundary.iter().map(|lp| signed_area(lp)).collect()
+}
+
+#[test]
+fn contour2d_constant_inside_field_covers_the_element_exactly() {
+    for element in [Element2::Square, Element2::Triangle] {
+        for samples in [2, 3, 10, 57] {
+            let what = format!("{element:?} at {samples}");
+            let r = region(|_| -1.0, element, samples);
+            let area = r.area();
+            assert!((area - element.area()).abs() < 1e-9, "{what}: area {area}");
+            let loops = assert_consistent(&r, &what);
+            assert_eq!(loops.len(), 1, "{what}");
+            assert!(
+                (loops[0] - element.area()).abs() < 1e-12,
+                "{what}: {loops:?}"
+            );
+            // The loop passes through every corner of the element.
+            for corner in element.outline() {
+                let near = r.boundary[0]
+                    .iter()
+                    .any(|q| (q[0] - corner[0]).hypot(q[1] - corner[1]) < 1e-6);
+                assert!(near, "{what}: corner {corner:?} missing");
+            }
+        }
+    }
+    // A shallow constant too: the clip decides the triangle's third side.
+    let r = region(|_| -1e-3, Element2::Triangle, 30);
+    assert!((r.area() - Element2::Triangle.area()).abs() < 1e-9);
+}
+
+#[test]
+fn contour2d_disc_has_the_disc_area_and_one_ccw_loop() {
+    for (element, radius) in [(Element2::Square, 0.3), (Element2::Triangle, 0.2)] {
+        for (samples, tolerance) in [(41, 4e-3), (101, 8e-4)] {
+            let what = format!("{element:?} disc at {samples}");
+            let r = region(disc(radius), element, samples);
+            let exact = PI * radius * radius;
+            let error = (r.area() - exact) / exact;
+            assert!(error.abs() < tolerance, "{what}: relative error {error:e}");
+            let loops = assert_consistent(&r, &what);
+            assert_eq!(loops.len(), 1, "{what}");
+            assert!(loops[0] > 0.0, "{what}: loop is clockwise");
+            assert!((loops[0] - r.area()).abs() < 1e-6, "{what}");
+        }
+    }
+    assert!((PI * 0.09 - region(disc(0.3), Element2::Square, 201).area()).abs() < 2e-4);
+}
+
+#[test]
+fn contour2d_annulus_has_an_outer_ccw_and_an_inner_cw_loop() {
+    let annulus = |p: [f64; 2]| {
+        let r = p[0].hypot(p[1]);
+        (r - 0.35).max(0.15 - r)
+    };
+    for element in [Element2::Square, Element2::Triangle] {
+        // The triangle's inradius is √3/6 ≈ 0.289 < 0.35: its annulus is cut by the sides,
+        // still one outer loop around one hole.
+        let r = region(annulus, element, 81);
+        let what = format!("{element:?} annulus");
+        let loops = assert_consistent(&r, &what);
+        assert_eq!(loops.len(), 2, "{what}: {loops:?}");
+        assert_eq!(loops.iter().filter(|&&a| a > 0.0).count(), 1, "{what}");
+        assert_eq!(loops.iter().filter(|&&a| a < 0.0).count(), 1, "{what}");
+        let total: f64 = loops.iter().sum();
+        assert!(
+            (total - r.area()).abs() < 1e-6,
+            "{what}: {total} vs {}",
+            r.area()
+        );
+        if element == Element2::Square {
+            let exact = PI * (0.35f64.powi(2) - 0.15f64.powi(2));
+            assert!(((r.area() - exact) / exact).abs() < 3e-3, "{}", r.area());
+        }
+    }
+}
+
+#[test]
+fn contour2d_saddles_follow_the_face_rule() {
+    // A checkerboard of discs puts ambiguous cells everywhere; with the face rule the inside
+    // corners are separated, so the region stays an edge- and vertex-manifold set of loops.
+    let checker = |p: [f64; 2]| -(6.0 * PI * p[0]).cos() * (6.0 * PI * p[1]).cos();
+    for element in [Element2::Square, Element2::Triangle] {
+        for samples in [7, 13, 40] {
+            let what = format!("{element:?} checker at {samples}");
+            let r = region(checker, element, samples);
+            let loops = assert_consistent(&r, &what);
+            let total: f64 = loops.iter().sum();
+            assert!((total - r.area()).abs() < 1e-6, "{what}");
+        }
+    }
+    // Exactly ambiguous square: inside at two diagonal corners only gives two corner triangles.
+    let r = region(
+        |p| if p[0] * p[1] > 0.0 { -1.0 } else { 1.0 },
+        Element2::Square,
+        2,
+    );
+    assert_eq!(r.mesh.triangles.len(), 2);
+    assert_eq!(r.boundary.len(), 2);
+}
+
+#[test]
+fn contour2d_bad_input_is_an_error() {
+    for element in [Element2::Square, Element2::Triangle] {
+        for samples in [0, 1] {
+            assert_eq!(
+                contour_planar(&|_| -1.0, element, samples),
+                Err(PlanarError::TooFewSamples(samples))
+            );
+        }
+        assert!(matches!(
+            contour_planar(&|_| -1.0, element, usize::MAX),
+            Err(PlanarError::TooManySamples(_))
+        ));
+        let empty = region(|_| f64::NAN, element, 9);
+        assert!(empty.mesh.is_empty() && empty.boundary.is_empty());
+    }
+}
+
+#[test]
+fn contour2d_element_geometry() {
+    let tri = Element2::Triangle;
+    let outline = tri.outline();
+    assert!((signed_area(&outline) - 3f64.sqrt() / 4.0).abs() < 1e-15);
+    let centroid = outline
+        .iter()
+        .fold([0.0; 2], |c, p| [c[0] + p[0] / 3.0, c[1] + p[1] / 3.0]);
+    assert!(centroid[0].abs() < 1e-15 && centroid[1].abs() < 1e-15);
+    for k in 0..3 {
+        let (a, b) = (outline[k], outline[(k + 1) % 3]);
+        assert!(((a[0] - b[0]).hypot(a[1] - b[1]) - 1.0).abs() < 1e-15);
+        assert!(tri.signed_distance(a).abs() < 1e-15);
+    }
+    assert!(outline[2][0] == 0.0 && outline[2][1] > 0.0, "points to +y");
+    assert!((tri.signed_distance([0.0, 0.0]) + 3f64.sqrt() / 6.0).abs() < 1e-15);
+    let sq = Element2::Square;
+    assert!((sq.signed_distance([0.8, 0.9]) - 0.5).abs() < 1e-15);
+    assert!((sq.signed_distance([0.0, 0.1]) + 0.4).abs() < 1e-15);
+    assert_eq!(sq.bbox(), ([-0.5; 2], [0.5; 2]));
+}
+
+/// Checks that tags are balanced: a tiny tag-stack parser, enough for what we write.
+fn assert_balanced_xml(s: &str) {
+    let mut stack: Vec<String> = Vec::new();
+    let mut rest = s;
+    while let Some(open) = rest.find('<') {
+        let close = rest[open..].find('>').expect("unclosed tag") + open;
+        let tag = &rest[open + 1..close];
+        if let Some(name) = tag.strip_prefix('/') {
+            assert_eq!(
+                stack.pop().as_deref(),
+                Some(name.trim()),
+                "mismatched </{name}>"
+            );
+        } else if !tag.ends_with('/') {
+            let name = tag.split_whitespace().next().expect("tag name");
+            stack.push(name.to_string());
+        }
+        rest = &rest[close + 1..];
+    }
+    assert!(stack.is_empty(), "unclosed: {stack:?}");
+}
+
+#[test]
+fn contour2d_svg_draws_every_loop_in_one_evenodd_path() {
+    let annulus = |p: [f64; 2]| {
+        let r = p[0].hypot(p[1]);
+        (r - 0.35).max(0.15 - r)
+    };
+    for element in [Element2::Square, Element2::Triangle] {
+        let r = region(annulus, element, 33);
+        let mut out = Vec::new();
+        write_svg(&r, &element.outline(), &mut out).expect("svg");
+        let svg = String::from_utf8(out.clone()).expect("utf8");
+        assert!(svg.starts_with("<svg"), "{svg}");
+        assert_balanced_xml(&svg);
+        assert_eq!(svg.matches("<path").count(), 1);
+        assert!(svg.contains("fill-rule=\"evenodd\""));
+        let d_start = svg.find(" d=\"").expect("d") + 4;
+        let d = &svg[d_start..d_start + svg[d_start..].find('"').expect("end of d")];
+        assert_eq!(d.matches('M').count(), r.boundary.len());
+        assert_eq!(d.matches('Z').count(), r.boundary.len());
+        assert!(
+            !d.contains("NaN") && !d.contains("e-"),
+            "plain decimals: {d}"
+        );
+        // y is flipped: the triangle's apex (+y) is at the top, i.e. the most negative y.
+        if element == Element2::Triangle {
+            let apex = "0,-0.57735".to_string();
+            assert!(svg.contains(&apex), "apex {apex} not in {svg}");
+        }
+        // Deterministic.
+        let mut again = Vec::new();
+        write_svg(&r, &element.outline(), &mut again).expect("svg");
+        assert_eq!(out, again);
+    }
+    // Empty region and non-finite input.
+    let mut out = Vec::new();
+    write_svg(&PlanarRegion::default(), &[], &mut out).expect("empty svg");
+    assert_balanced_xml(std::str::from_utf8(&out).expect("utf8"));
+    let bad = [[0.0, f64::NAN]];
+    let mut none = Vec::new();
+    assert!(write_svg(&PlanarRegion::default(), &bad, &mut none).is_err());
+    assert!(none.is_empty(), "nothing written on bad input");
+}
