@@ -51,7 +51,11 @@ impl Report {
             euler_characteristic: s.euler_characteristic,
             volume: s.volume,
             area: s.area,
-            volume_fraction: s.volume / domain_volume,
+            // A planar region reports its share of the element's area.
+            volume_fraction: match result.written.planar_element_area {
+                Some(element_area) => s.area / element_area,
+                None => s.volume / domain_volume,
+            },
             bbox: Bbox {
                 min: s.bbox_min,
                 max: s.bbox_max,

@@ -57,18 +57,38 @@ impl MeshSummary {
     }
 }
 
-/// A contoured mesh with its summary.
+/// A contoured mesh with its summary, and for 2D cells the planar region's outline.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshArtifact {
     pub mesh: Mesh,
     pub summary: MeshSummary,
+    pub planar: Option<Planar>,
+}
+
+/// What the SVG of a 2D cell needs: the region's boundary loops and the element's outline.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Planar {
+    pub boundary: Vec<Vec<[f64; 2]>>,
+    pub element: Vec<[f64; 2]>,
+    pub element_area: f64,
+}
+
+/// The JSON part of a mesh payload.
+#[derive(Serialize, Deserialize)]
+struct MeshHead {
+    summary: MeshSummary,
+    planar: Option<Planar>,
 }
 
 impl MeshArtifact {
     /// The payload is `head()` followed by the two `arrays()`, written one after the other so
     /// a 300 MB mesh is never concatenated in memory.
     pub fn head(&self) -> Vec<u8> {
-        let summary = serde_json::to_vec(&self.summary).expect("summary serializes");
+        let head = MeshHead {
+            summary: self.summary.clone(),
+            planar: self.planar.clone(),
+        };
+        let summary = serde_json::to_vec(&head).expect("summary serializes");
         let mut head = Vec::with_capacity(32 + summary.len());
         head.extend_from_slice(MESH_MAGIC);
         head.extend_from_slice(&(self.mesh.vertices.len() as u64).to_le_bytes());
@@ -112,7 +132,7 @@ impl MeshArtifact {
         if payload.len() != end {
             return Err(bad("length does not match the counts"));
         }
-        let summary =
+        let MeshHead { summary, planar } =
             serde_json::from_slice(&payload[32..summary_end]).map_err(|e| bad(&e.to_string()))?;
         let vertices = bytemuck::pod_collect_to_vec(&payload[summary_end..vertices_end]);
         let triangles = bytemuck::pod_collect_to_vec(&payload[vertices_end..end]);
@@ -122,6 +142,7 @@ impl MeshArtifact {
                 triangles,
             },
             summary,
+            planar,
         })
     }
 }
@@ -143,4 +164,6 @@ pub struct WrittenFile {
 pub struct WrittenOutput {
     pub files: Vec<WrittenFile>,
     pub summary: MeshSummary,
+    /// For a 2D cell, the element's area (the report's fraction is area over it).
+    pub planar_element_area: Option<f64>,
 }

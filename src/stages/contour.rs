@@ -2,17 +2,21 @@
 //! solid into a checked, watertight mesh.
 
 use latticebuild_geom::contour::contour;
+use latticebuild_geom::contour2d::{Element2, contour_planar};
+use latticebuild_geom::element::{Element3, contour_clipped};
 use latticebuild_geom::expr;
-use latticebuild_geom::field::{Grid, ScalarField, Solid, SolidSampler};
+use latticebuild_geom::field::{Grid, ScalarField, Solid, SolidField, SolidSampler};
+use latticebuild_geom::mesh::Mesh;
+use latticebuild_geom::symmetric::{Group, ReferenceElement};
 use latticebuild_geom::validate;
 
-use super::artifact::{MeshArtifact, MeshSummary};
+use super::artifact::{MeshArtifact, MeshSummary, Planar};
 use super::symmetric::{FittedPayload, group_of};
 use crate::build::StageProgress;
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::{GroupSpec, Output, Symmetric};
 
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct ContourStage {
@@ -90,17 +94,78 @@ impl ContourStage {
                 Box::new(FittedPayload::from_bytes(cell_payload)?.cell(&group)?)
             }
         };
-        let model = Grid::spanning(self.domain_min, self.domain_max, self.samples);
-        let cell_grid = model.scaled_down(self.cell_size);
-        let sampler = SolidSampler {
-            inner: field.sampler(&cell_grid),
-            solid: self.solid,
-        };
         progress.phase("contouring");
-        let mesh =
-            contour(&sampler, &model, &|n| progress.advance(n)).map_err(|e| e.to_string())?;
+        let (mesh, planar) = if self.over_element {
+            let group = match &self.fitted {
+                Some(spec) => group_of(spec)?,
+                None => return Err("`over = \"element\"` needs a cell with a symmetry".into()),
+            };
+            self.contour_element(&*field, &group, progress)?
+        } else {
+            let model = Grid::spanning(self.domain_min, self.domain_max, self.samples);
+            let cell_grid = model.scaled_down(self.cell_size);
+            let sampler = SolidSampler {
+                inner: field.sampler(&cell_grid),
+                solid: self.solid,
+            };
+            let mesh =
+                contour(&sampler, &model, &|n| progress.advance(n)).map_err(|e| e.to_string())?;
+            (mesh, None)
+        };
         progress.phase("checking the mesh");
         let summary = MeshSummary::from_check(&validate::check(&mesh));
-        Ok(MeshArtifact { mesh, summary })
+        Ok(MeshArtifact {
+            mesh,
+            summary,
+            planar,
+        })
+    }
+
+    /// The cell clipped to its reference element: a closed mesh for the cube and the
+    /// tetrahedron, a planar region (and its outline, for the SVG) for the square and triangle.
+    fn contour_element(
+        &self,
+        field: &dyn ScalarField,
+        group: &Group,
+        progress: &dyn StageProgress,
+    ) -> Result<(Mesh, Option<Planar>), String> {
+        let samples = self.samples[0].max(self.samples[1]);
+        let solid = SolidField {
+            inner: field,
+            solid: self.solid,
+        };
+        let planar = |element: Element2| -> Result<(Mesh, Option<Planar>), String> {
+            let value = |p: [f64; 2]| {
+                let mut out = [0.0];
+                solid.eval_points(&[p[0]], &[p[1]], &[0.0], &mut out);
+                out[0]
+            };
+            let region = contour_planar(&value, element, samples).map_err(|e| e.to_string())?;
+            let outline = Planar {
+                boundary: region.boundary.clone(),
+                element: element.outline(),
+                element_area: element.area(),
+            };
+            Ok((region.mesh, Some(outline)))
+        };
+        let advance = |n: usize| progress.advance(n);
+        match group.reference_element() {
+            Some(ReferenceElement::Cube) => Ok((
+                contour_clipped(&solid, Element3::Cube, samples, &advance)
+                    .map_err(|e| e.to_string())?,
+                None,
+            )),
+            Some(ReferenceElement::Tetrahedron) => Ok((
+                contour_clipped(&solid, Element3::Tetrahedron, samples, &advance)
+                    .map_err(|e| e.to_string())?,
+                None,
+            )),
+            Some(ReferenceElement::Square) => planar(Element2::Square),
+            Some(ReferenceElement::Triangle) => planar(Element2::Triangle),
+            None => Err(format!(
+                "group {} has no reference element to contour over",
+                group.name()
+            )),
+        }
     }
 }

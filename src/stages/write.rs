@@ -4,6 +4,7 @@ use std::io::{self, Write};
 
 use rayon::prelude::*;
 
+use latticebuild_geom::contour2d::PlanarRegion;
 use latticebuild_geom::mesh_io::{self, Encoding, Format};
 
 use super::artifact::{MeshArtifact, WrittenFile, WrittenOutput};
@@ -83,9 +84,31 @@ impl WriteStage {
                 })
             })
             .collect::<Result<Vec<_>, String>>()?;
+        let mut files = files;
+        if let Some(planar) = &artifact.planar {
+            // A 2D cell also gets its region as an SVG drawing.
+            let path = format!("{}.svg", self.stem);
+            let region = PlanarRegion {
+                mesh: Default::default(),
+                positions: Vec::new(),
+                boundary: planar.boundary.clone(),
+            };
+            let (bytes, modified_ns) = sink
+                .write_file(&path, &mut |w| {
+                    mesh_io::write_svg(&region, &planar.element, w)
+                })
+                .map_err(|e| format!("cannot write `{path}`: {e}"))?;
+            files.push(WrittenFile {
+                path,
+                format: "svg".into(),
+                bytes,
+                modified_ns,
+            });
+        }
         Ok(WrittenOutput {
             files,
             summary: artifact.summary.clone(),
+            planar_element_area: artifact.planar.as_ref().map(|p| p.element_area),
         })
     }
 }

@@ -160,3 +160,26 @@ impl PlaneSampler for SolidSampler<'_> {
         }
     }
 }
+
+/// A field seen through a [`Solid`]: the solid's implicit function, negative inside, for the
+/// contourers that take a [`ScalarField`] (element clipping).
+pub struct SolidField<'a> {
+    pub inner: &'a dyn ScalarField,
+    pub solid: Solid,
+}
+
+impl ScalarField for SolidField<'_> {
+    fn eval_points(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
+        self.inner.eval_points(xs, ys, zs, out);
+        for v in out.iter_mut() {
+            *v = self.solid.apply(*v);
+        }
+    }
+
+    fn sampler<'b>(&'b self, grid: &Grid) -> Box<dyn PlaneSampler + 'b> {
+        Box::new(SolidSampler {
+            inner: self.inner.sampler(grid),
+            solid: self.solid,
+        })
+    }
+}
