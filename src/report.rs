@@ -29,7 +29,10 @@ pub struct Report {
     pub euler_characteristic: i64,
     pub volume: f64,
     pub area: f64,
+    /// Volume over the domain's volume; for a planar region (2D cell), area over the element's.
     pub volume_fraction: f64,
+    /// A planar region of a 2D cell (open by nature: `watertight` is false).
+    pub planar: bool,
     pub bbox: Bbox,
     pub files: Vec<String>,
     pub stages: Vec<StageReport>,
@@ -56,6 +59,7 @@ impl Report {
                 Some(element_area) => s.area / element_area,
                 None => s.volume / domain_volume,
             },
+            planar: result.written.planar_element_area.is_some(),
             bbox: Bbox {
                 min: s.bbox_min,
                 max: s.bbox_max,
@@ -83,6 +87,15 @@ impl Report {
         let seconds: f64 = self.stages.iter().map(|s| s.seconds).sum();
         let cached = self.stages.iter().filter(|s| s.cached).count();
         let validity = match (self.watertight, self.manifold) {
+            _ if self.planar => format!(
+                "planar region, {}, area fraction {:.4}",
+                if self.manifold {
+                    "manifold"
+                } else {
+                    "NOT manifold"
+                },
+                self.volume_fraction
+            ),
             (true, true) => "watertight, manifold".to_string(),
             (w, m) => format!(
                 "{}, {}",

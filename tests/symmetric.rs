@@ -1,0 +1,157 @@
+//! Symmetric cells through the real binary: `latticebuild cell` against independent values,
+//! and the cache reusing fitted cells.
+
+mod common;
+
+use common::{Project, ran};
+
+const MANIFEST: &str = r#"
+[cells.p]
+expr = "cos(tau*x) + cos(tau*y) + cos(tau*z)"
+symmetry = "Oh"
+fit = { n = 16 }
+
+[cells.tsin]
+expr = "sin(tau*x)*sin(tau*y)*sin(tau*z) + 0.25*cos(tau*x)*cos(tau*y)*cos(tau*z)"
+symmetry = "Td"
+extend = "none"     # sample the cube as is: mirroring would change this (symmetric) input
+fit = { n = 16 }
+
+[outputs.block]
+cell = "p"
+domain = { min = [0, 0, 0], max = [2, 2, 2] }
+samples = 41
+
+[outputs.tet]
+cell = "tsin"
+over = "element"
+samples = 17
+"#;
+
+fn cell_json(p: &Project, name: &str) -> serde_json::Value {
+    let out = p.run(&[
+        "cell",
+        "lattice.toml",
+        name,
+        "--json",
+        "--points",
+        "points.txt",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("json")
+}
+
+const POINTS: [[f64; 3]; 4] = [
+    [0.0, 0.0, 0.0],
+    [0.1, -0.2, 0.3],
+    [0.45, 0.05, -0.33],
+    [-0.25, 0.4, 0.125],
+];
+
+fn write_points(p: &Project) {
+    let text: String = POINTS
+        .iter()
+        .map(|q| format!("{} {} {}\n", q[0], q[1], q[2]))
+        .collect();
+    p.write("points.txt", &format!("# x y z\n{text}"));
+}
+
+#[test]
+fn cell_reproduces_band_limited_inputs_with_values_and_gradients() {
+    use std::f64::consts::TAU;
+    let p = Project::new(MANIFEST);
+    write_points(&p);
+    // A band-limited input is reproduced exactly (METHOD.md §4), so the values must be the
+    // formula's own, computed here independently.
+    let json = cell_json(&p, "p");
+    assert_eq!(json["group"], "Oh");
+    assert_eq!(json["n"], 16);
+    for (row, q) in json["values"]
+        .as_array()
+        .expect("values")
+        .iter()
+        .zip(POINTS)
+    {
+        let expected = (TAU * q[0]).cos() + (TAU * q[1]).cos() + (TAU * q[2]).cos();
+        assert!(
+            (row["value"].as_f64().expect("value") - expected).abs() < 1e-12,
+            "{row}"
+        );
+        for a in 0..3 {
+            let g = row["gradient"][a].as_f64().expect("gradient");
+            assert!((g + TAU * (TAU * q[a]).sin()).abs() < 1e-10, "{row}");
+        }
+    }
+    // Oh coefficients are real; P has exactly one orbit, f = (1, 0, 0).
+    let coefficients = json["coefficients"].as_array().expect("coefficients");
+    let big: Vec<_> = coefficients
+        .iter()
+        .filter(|c| c["re"].as_f64().unwrap_or(0.0).abs() > 1e-9)
+        .collect();
+    assert_eq!(big.len(), 1, "{big:?}");
+    assert_eq!(big[0]["f"], serde_json::json!([1, 0, 0]));
+
+    // A Td-only input (fails if the projection lacks the conjugate).
+    let json = cell_json(&p, "tsin");
+    for (row, q) in json["values"]
+        .as_array()
+        .expect("values")
+        .iter()
+        .zip(POINTS)
+    {
+        let (s, c) = (|v: f64| (TAU * v).sin(), |v: f64| (TAU * v).cos());
+        let expected = s(q[0]) * s(q[1]) * s(q[2]) + 0.25 * c(q[0]) * c(q[1]) * c(q[2]);
+        assert!(
+            (row["value"].as_f64().expect("value") - expected).abs() < 1e-12,
+            "{row}"
+        );
+    }
+    assert_eq!(json["constraint"]["applied"], false);
+}
+
+#[test]
+fn cell_errors_name_the_cell() {
+    let p = Project::new(&format!("{MANIFEST}\n[cells.plain]\ntpms = \"gyroid\"\n"));
+    let out = p.run(&["cell", "lattice.toml", "plain"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cell `plain` has no `symmetry`"));
+    let out = p.run(&["cell", "lattice.toml", "tsn"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("did you mean `tsin`?"));
+}
+
+#[test]
+fn contour_resolution_changes_reuse_fitted_cells() {
+    let p = Project::new(MANIFEST);
+    let first = p.build(&[]);
+    assert!(ran(&first).contains(&"fit:p".to_string()));
+    let again = p.build(&["--set", "outputs.block.samples=33"]);
+    assert_eq!(ran(&again), ["contour:block", "write:block"]);
+    let offset = p.build(&["--set", "cells.p.offset=0.2"]);
+    assert_eq!(
+        ran(&offset),
+        ["constrain:p", "contour:block", "write:block"]
+    );
+}
+
+#[test]
+fn fitted_outputs_are_watertight_and_td_element_is_closed() {
+    let p = Project::new(MANIFEST);
+    let reports = p.build(&[]);
+    for r in reports.as_array().expect("array") {
+        assert_eq!(r["watertight"], true, "{}", r["name"]);
+        assert_eq!(r["manifold"], true, "{}", r["name"]);
+    }
+    // P at offset 0 over whole periods splits the box in half.
+    let block = reports
+        .as_array()
+        .expect("array")
+        .iter()
+        .find(|r| r["name"] == "block")
+        .expect("block");
+    assert!((block["volume_fraction"].as_f64().expect("fraction") - 0.5).abs() < 0.003);
+}
