@@ -88,6 +88,26 @@ pub enum FitError {
     SampleCount { expected: usize, got: usize },
     #[error("coefficient of {f:?} is not finite")]
     NonFiniteCoefficient { f: [i32; 3] },
+    #[error(
+        "the face-normal constraint needs a reference element; the group {group} has none (only D3, D4, Td and Oh)"
+    )]
+    NoReferenceElement { group: String },
+    #[error("the SVD of the face-normal constraint system did not converge ({rows}×{cols} block)")]
+    ConstraintSvd { rows: usize, cols: usize },
+    #[error(
+        "automatic N: the tolerance must be finite and positive, and max_n at least 64 (two sizes to compare); got tolerance {tolerance}, max_n {max_n}"
+    )]
+    AutoOptions { tolerance: f64, max_n: usize },
+    #[error(
+        "automatic N: the surface still moved {movement:.3e} (cell units) from N = {n} to N = {}, above the tolerance {tolerance:.3e}; raise max_n (now {max_n}) or loosen the tolerance",
+        2 * n
+    )]
+    AutoNotConverged {
+        tolerance: f64,
+        max_n: usize,
+        n: usize,
+        movement: f64,
+    },
 }
 
 /// Options of [`fit`].

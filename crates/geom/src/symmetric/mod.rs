@@ -15,6 +15,9 @@
 //!   [`ScalarField`](crate::field::ScalarField) whose grid sampler is separable per axis
 //!   (private `sampler` module), so the contourer can mesh rich fits.
 //! - [`blend`] — weighted averages and Minkowski sum/difference.
+//! - [`constrain`] — the face-normal constraint `∇Φ·n = 0` on the reference element's faces
+//!   (METHOD.md §6): a least-change projection of the coefficients by SVD.
+//! - [`auto`] — automatic `N`: double until the zero set moves less than a tolerance.
 //! - `fft` (private) — realfft along x (contiguous), rustfft along y and z, rayon across
 //!   planes and rows.
 //!
@@ -24,14 +27,11 @@
 //! Frames: every public point and gradient is Cartesian, in the reference frame where the cell
 //! has size 1 and its centroid at the origin. Frequencies and grid coordinates are in the
 //! group's frame (skew for D3). 2D cells use `[x, y, 0]` and frequencies `[f1, f2, 0]`.
-//!
-//! Not here yet (seams kept): the face-normal constraint (METHOD.md §6) would build its
-//! constraint rows from [`Group::orbit`], [`Group::normalization`] and the coefficients, and
-//! return a cell through [`FittedCell::from_coefficients`]; `n = "auto"` would call [`fit()`] at
-//! successive `N`.
 
+pub mod auto;
 pub mod basis;
 pub mod blend;
+pub mod constrain;
 pub mod domain;
 pub mod eval;
 mod fft;
@@ -40,7 +40,9 @@ pub mod frequency;
 pub mod group;
 mod sampler;
 
+pub use auto::{AUTO_START_N, PROBE_N, fit_auto, surface_movement};
 pub use blend::{minkowski_difference, minkowski_sum, weighted_average};
+pub use constrain::{CONSTRAINT_TOLERANCE, ConstraintReport, FACE_SAMPLES};
 pub use domain::{Extend, FnSource, SampleOptions, Source, from_fn, sample};
 pub use eval::PRUNE_TOLERANCE;
 pub use fit::{
