@@ -174,7 +174,7 @@ fn decode_samples(payload: &[u8]) -> Result<(usize, Vec<f64>), String> {
     let bad = || "malformed samples payload".to_string();
     if payload.get(..8) != Some(SAMPLES_MAGIC.as_slice())
         || payload.len() < 24
-        || (payload.len() - 24) % 8 != 0
+        || !(payload.len() - 24).is_multiple_of(8)
     {
         return Err(bad());
     }
