@@ -1,9 +1,11 @@
 //! Round trips of every writer through independent readers (stl_io, ply-rs-bw, tobj, and small
 //! parsers written here from the format descriptions for OFF and legacy VTK).
 
+mod common;
+
+use common::torus;
 use latticebuild_geom::mesh::Mesh;
 use latticebuild_geom::mesh_io::{Encoding, Format, write_mesh};
-use std::f64::consts::TAU;
 use std::io::{self, Write};
 
 // ---------------------------------------------------------------------------------------------
@@ -26,36 +28,6 @@ fn unit_cube() -> Mesh {
         .iter()
         .flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]])
         .collect();
-    Mesh {
-        vertices,
-        triangles,
-    }
-}
-
-/// A torus with `n` segments around the axis and `m` around the tube, outward winding.
-fn torus(n: u32, m: u32, big_r: f64, r: f64) -> Mesh {
-    let mut vertices = Vec::with_capacity((n * m) as usize);
-    for i in 0..n {
-        let theta = TAU * f64::from(i) / f64::from(n);
-        for j in 0..m {
-            let phi = TAU * f64::from(j) / f64::from(m);
-            let rho = big_r + r * phi.cos();
-            vertices.push([
-                (rho * theta.cos()) as f32,
-                (rho * theta.sin()) as f32,
-                (r * phi.sin()) as f32,
-            ]);
-        }
-    }
-    let id = |i: u32, j: u32| (i % n) * m + (j % m);
-    let mut triangles = Vec::with_capacity(2 * (n * m) as usize);
-    for i in 0..n {
-        for j in 0..m {
-            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            triangles.push([a, b, c]);
-            triangles.push([a, c, d]);
-        }
-    }
     Mesh {
         vertices,
         triangles,
@@ -93,7 +65,7 @@ fn awkward() -> Mesh {
 fn test_meshes() -> Vec<(&'static str, Mesh)> {
     vec![
         ("cube", unit_cube()),
-        ("torus", torus(24, 12, 3.0, 1.0)),
+        ("torus", torus(24, 12, 3.0, 1.0, [0.0; 3])),
         ("awkward", awkward()),
         ("empty", Mesh::default()),
     ]
@@ -521,7 +493,7 @@ fn vtk_round_trips_through_a_reference_parser_in_both_encodings() {
 #[test]
 fn large_meshes_survive_the_block_boundaries() {
     // Several batches of 1 MiB blocks in every encoding.
-    let mesh = torus(600, 300, 10.0, 2.5);
+    let mesh = torus(600, 300, 10.0, 2.5, [0.0; 3]);
     let facets = read_stl(&write(&mesh, Format::Stl, Encoding::Binary));
     assert!(
         facets.iter().zip(&mesh.triangles).all(|(facet, tri)| {
@@ -616,7 +588,7 @@ impl Write for FailAfter {
 
 #[test]
 fn writer_errors_are_returned_not_panicked() {
-    let mesh = torus(200, 100, 10.0, 2.5);
+    let mesh = torus(200, 100, 10.0, 2.5, [0.0; 3]);
     for format in Format::ALL {
         for encoding in [Encoding::Binary, Encoding::Ascii] {
             let full = write(&mesh, format, encoding).len();

@@ -2,41 +2,12 @@
 //! Run with `cargo test --release -p latticebuild-geom --test mesh_io_timing -- --ignored
 //! --nocapture`. Targets: binary PLY ≤ 0.25 s, binary STL ≤ 0.5 s.
 
+mod common;
+
+use common::torus;
 use latticebuild_geom::mesh::Mesh;
 use latticebuild_geom::mesh_io::{Encoding, Format, write_mesh};
-use std::f64::consts::TAU;
 use std::time::{Duration, Instant};
-
-/// A torus with `n × m` vertices and `2 n m` triangles.
-fn torus(n: u32, m: u32) -> Mesh {
-    let (big_r, r) = (30.0, 10.0);
-    let mut vertices = Vec::with_capacity((n * m) as usize);
-    for i in 0..n {
-        let theta = TAU * f64::from(i) / f64::from(n);
-        for j in 0..m {
-            let phi = TAU * f64::from(j) / f64::from(m);
-            let rho = big_r + r * phi.cos();
-            vertices.push([
-                (rho * theta.cos()) as f32,
-                (rho * theta.sin()) as f32,
-                (r * phi.sin()) as f32,
-            ]);
-        }
-    }
-    let id = |i: u32, j: u32| (i % n) * m + (j % m);
-    let mut triangles = Vec::with_capacity(2 * (n * m) as usize);
-    for i in 0..n {
-        for j in 0..m {
-            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            triangles.push([a, b, c]);
-            triangles.push([a, c, d]);
-        }
-    }
-    Mesh {
-        vertices,
-        triangles,
-    }
-}
 
 /// Best of `runs` timings, which filters out interference from other work on the machine.
 fn best_of(runs: usize, mut f: impl FnMut()) -> Duration {
@@ -58,7 +29,7 @@ fn time_write(mesh: &Mesh, format: Format, encoding: Encoding, runs: usize) -> f
 }
 
 fn big_mesh() -> Mesh {
-    let mesh = torus(4096, 2048);
+    let mesh = torus(4096, 2048, 30.0, 10.0, [0.0; 3]);
     assert_eq!(mesh.triangles.len(), 16 << 20);
     println!(
         "{} vertices, {} triangles, {} rayon threads",

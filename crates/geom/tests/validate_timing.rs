@@ -3,46 +3,16 @@
 //! --nocapture`. Target: ≤ 0.6 s on 2 cores (printed; the assertion only guards against gross
 //! regressions).
 
-use latticebuild_geom::mesh::Mesh;
-use latticebuild_geom::validate::check;
-use std::f64::consts::TAU;
-use std::time::Instant;
+mod common;
 
-/// A torus with `n × m` vertices and `2 n m` triangles, outward winding.
-fn torus(n: u32, m: u32) -> Mesh {
-    let (big_r, r) = (30.0, 10.0);
-    let mut vertices = Vec::with_capacity((n * m) as usize);
-    for i in 0..n {
-        let theta = TAU * f64::from(i) / f64::from(n);
-        for j in 0..m {
-            let phi = TAU * f64::from(j) / f64::from(m);
-            let rho = big_r + r * phi.cos();
-            vertices.push([
-                (rho * theta.cos()) as f32,
-                (rho * theta.sin()) as f32,
-                (r * phi.sin()) as f32,
-            ]);
-        }
-    }
-    let id = |i: u32, j: u32| (i % n) * m + (j % m);
-    let mut triangles = Vec::with_capacity(2 * (n * m) as usize);
-    for i in 0..n {
-        for j in 0..m {
-            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            triangles.push([a, b, c]);
-            triangles.push([a, c, d]);
-        }
-    }
-    Mesh {
-        vertices,
-        triangles,
-    }
-}
+use common::torus;
+use latticebuild_geom::validate::check;
+use std::time::Instant;
 
 #[test]
 #[ignore = "timing; run in release"]
 fn check_16m_triangles_timing() {
-    let mesh = torus(4096, 2048);
+    let mesh = torus(4096, 2048, 30.0, 10.0, [0.0; 3]);
     println!(
         "{} vertices, {} triangles, {} rayon threads",
         mesh.vertices.len(),
