@@ -22,8 +22,9 @@ use crate::report::Report;
     version,
     about = "Build lattice microstructures from a TOML manifest through a cached stage DAG",
     long_about = "latticebuild turns a TOML manifest of unit cells and outputs into watertight \
-                  lattice meshes. Stages (cell, contour, write) are cached under .latticebuild/ \
-                  next to the manifest, so a rebuild only redoes what changed."
+                  lattice meshes. Every stage (cell, sample, fit, constrain, contour, write) is \
+                  cached under .latticebuild/ next to the manifest, so a rebuild only redoes what \
+                  changed."
 )]
 pub struct Cli {
     #[command(subcommand)]
