@@ -133,6 +133,40 @@ pub(super) fn push_indices(buf: &mut Vec<u8>, tri: &[u32; 3], base: u64) {
     push_uint(buf, u64::from(tri[2]) + base);
 }
 
+/// Bytes of one text point line, for sizing blocks: three shortest-form f32 and separators.
+const TEXT_POINT_BYTES: usize = 48;
+/// Bytes of one text face line.
+const TEXT_FACE_BYTES: usize = 36;
+
+/// One line `PREFIX x y z` per vertex, in order (the text formats differ only in the prefix).
+pub(super) fn write_text_points(
+    out: &mut dyn Write,
+    vertices: &[[f32; 3]],
+    prefix: &[u8],
+) -> io::Result<()> {
+    let per_block = records_per_block(TEXT_POINT_BYTES + prefix.len());
+    write_encoded(out, vertices, per_block, |buf, p| {
+        buf.extend_from_slice(prefix);
+        push_point(buf, p);
+        buf.push(b'\n');
+    })
+}
+
+/// One line `PREFIX a b c` per triangle, indices counted from `base`.
+pub(super) fn write_text_faces(
+    out: &mut dyn Write,
+    triangles: &[[u32; 3]],
+    prefix: &[u8],
+    base: u64,
+) -> io::Result<()> {
+    let per_block = records_per_block(TEXT_FACE_BYTES + prefix.len());
+    write_encoded(out, triangles, per_block, |buf, tri| {
+        buf.extend_from_slice(prefix);
+        push_indices(buf, tri, base);
+        buf.push(b'\n');
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,12 +1,9 @@
 //! Wavefront OBJ: `v x y z` lines, then `f a b c` lines with 1-based indices. Always text.
 //! Every vertex is written, referenced or not, so face indices are the mesh's own plus one.
 
-use super::encode::{push_indices, push_point, records_per_block, write_encoded};
+use super::encode::{write_text_faces, write_text_points};
 use crate::mesh::Mesh;
 use std::io::{self, Write};
-
-const VERTEX_BYTES: usize = 50;
-const FACE_BYTES: usize = 36;
 
 pub(super) fn write(mesh: &Mesh, out: &mut dyn Write) -> io::Result<()> {
     write!(
@@ -15,25 +12,7 @@ pub(super) fn write(mesh: &Mesh, out: &mut dyn Write) -> io::Result<()> {
         mesh.vertices.len(),
         mesh.triangles.len()
     )?;
-    write_encoded(
-        out,
-        &mesh.vertices,
-        records_per_block(VERTEX_BYTES),
-        |buf, p| {
-            buf.extend_from_slice(b"v ");
-            push_point(buf, p);
-            buf.push(b'\n');
-        },
-    )?;
-    write_encoded(
-        out,
-        &mesh.triangles,
-        records_per_block(FACE_BYTES),
-        |buf, tri| {
-            buf.extend_from_slice(b"f ");
-            // OBJ counts vertices from 1.
-            push_indices(buf, tri, 1);
-            buf.push(b'\n');
-        },
-    )
+    write_text_points(out, &mesh.vertices, b"v ")?;
+    // OBJ counts vertices from 1.
+    write_text_faces(out, &mesh.triangles, b"f ", 1)
 }

@@ -6,14 +6,12 @@
 //! Every vertex is written, referenced or not, so indices are the mesh's own.
 
 use super::Encoding;
-use super::encode::{push_indices, push_point, records_per_block, write_encoded};
+use super::encode::{records_per_block, write_encoded, write_text_faces, write_text_points};
 use crate::mesh::Mesh;
 use std::io::{self, Write};
 
 const VERTEX_BYTES: usize = 12;
 const FACE_BYTES: usize = 13;
-const ASCII_VERTEX_BYTES: usize = 48;
-const ASCII_FACE_BYTES: usize = 36;
 
 pub(super) fn write(mesh: &Mesh, encoding: Encoding, out: &mut dyn Write) -> io::Result<()> {
     // The largest index is `vertices.len() - 1` and must fit an `int`.
@@ -67,25 +65,8 @@ pub(super) fn write(mesh: &Mesh, encoding: Encoding, out: &mut dyn Write) -> io:
             )
         }
         Encoding::Ascii => {
-            write_encoded(
-                out,
-                &mesh.vertices,
-                records_per_block(ASCII_VERTEX_BYTES),
-                |buf, p| {
-                    push_point(buf, p);
-                    buf.push(b'\n');
-                },
-            )?;
-            write_encoded(
-                out,
-                &mesh.triangles,
-                records_per_block(ASCII_FACE_BYTES),
-                |buf, tri| {
-                    buf.extend_from_slice(b"3 ");
-                    push_indices(buf, tri, 0);
-                    buf.push(b'\n');
-                },
-            )
+            write_text_points(out, &mesh.vertices, b"")?;
+            write_text_faces(out, &mesh.triangles, b"3 ", 0)
         }
     }
 }

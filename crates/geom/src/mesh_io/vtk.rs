@@ -15,14 +15,12 @@
 //! the `4M` size are 32-bit signed, which bounds vertex and triangle counts.
 
 use super::Encoding;
-use super::encode::{push_indices, push_point, records_per_block, write_encoded};
+use super::encode::{records_per_block, write_encoded, write_text_faces, write_text_points};
 use crate::mesh::Mesh;
 use std::io::{self, Write};
 
 const POINT_BYTES: usize = 12;
 const POLYGON_BYTES: usize = 16;
-const ASCII_POINT_BYTES: usize = 48;
-const ASCII_POLYGON_BYTES: usize = 36;
 
 pub(super) fn write(mesh: &Mesh, encoding: Encoding, out: &mut dyn Write) -> io::Result<()> {
     let limit = i32::MAX as usize;
@@ -85,26 +83,9 @@ pub(super) fn write(mesh: &Mesh, encoding: Encoding, out: &mut dyn Write) -> io:
             out.write_all(b"\n")
         }
         Encoding::Ascii => {
-            write_encoded(
-                out,
-                &mesh.vertices,
-                records_per_block(ASCII_POINT_BYTES),
-                |buf, p| {
-                    push_point(buf, p);
-                    buf.push(b'\n');
-                },
-            )?;
+            write_text_points(out, &mesh.vertices, b"")?;
             writeln!(out, "POLYGONS {} {}", mesh.triangles.len(), polygon_ints)?;
-            write_encoded(
-                out,
-                &mesh.triangles,
-                records_per_block(ASCII_POLYGON_BYTES),
-                |buf, tri| {
-                    buf.extend_from_slice(b"3 ");
-                    push_indices(buf, tri, 0);
-                    buf.push(b'\n');
-                },
-            )
+            write_text_faces(out, &mesh.triangles, b"3 ", 0)
         }
     }
 }
