@@ -20,10 +20,7 @@ use latticebuild_geom::symmetric::{
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::{FitResolution, GroupSpec, MinkowskiOp, Symmetric};
 
-pub const VERSION: u32 = 1;
-
-/// Largest fit size for which the Td face-normal constraint runs in about a second.
-const MAX_TD_CONSTRAINT_N: usize = 32;
+pub const VERSION: u32 = 2;
 
 const SAMPLES_MAGIC: &[u8; 8] = b"LBSAMP01";
 
@@ -322,14 +319,6 @@ impl ConstrainStage {
         let group = group_of(&self.spec.group)?;
         let mut cell = FittedPayload::from_bytes(input)?.cell(&group)?;
         let constraint = if self.spec.normal_to_faces {
-            // The dense SVD behind the constraint grows like N⁷ for the tetrahedron (0.8 s at
-            // N = 32, minutes at 64): refuse clearly instead of appearing to hang.
-            if group.name() == "Td" && cell.n() > MAX_TD_CONSTRAINT_N {
-                return Err(format!(
-                    "`normal_to_faces` on a Td cell is limited to fit n ≤ {MAX_TD_CONSTRAINT_N} for now (this cell has n = {}); set `fit = {{ n = {MAX_TD_CONSTRAINT_N} }}`",
-                    cell.n()
-                ));
-            }
             let (constrained, report) = cell
                 .constrain_normal_to_faces()
                 .map_err(|e| e.to_string())?;

@@ -23,17 +23,21 @@
 //! - Objective: `min ‖c′ − c‖²` with the HERMITIAN norm (`qᴴq`, conjugate transpose) subject
 //!   to `C c̃′ = 0`, i.e. `c′ = c − C⁺C c̃`: remove from `c̃` its component in the row space
 //!   of `C`. A plain transpose would project `conj(c)` instead.
-//! - Why SVD: `C` has more rows than unknowns and is rank-deficient (rows of lines that a
-//!   symmetry of the face maps onto each other are proportional, and others nearly so), so
-//!   forming `CCᴴ` (normal / KKT equations) squares an unbounded condition number. The
-//!   row space is taken from the right singular vectors of `C` with `σ > σ_max·max(m,n)·ε`.
-//!   nalgebra's SVD is thin, which is exactly what a row-space projection needs:
-//!   `C⁺C = V_r V_rᴴ`.
+//! - Solver: `C` is rank-deficient (rows of lines that a symmetry of the face maps onto each
+//!   other are proportional) and, after merging those, has a tail of small singular values
+//!   from frequencies near the corner of the band (σ_min/σ_max ≈ 3e-3, 5e-4, 6e-5 at N = 16,
+//!   32, 64 for Td), so forming `CCᴴ` (normal / KKT equations) would square that condition
+//!   number. METHOD.md §6 asks for an SVD or a complete orthogonal decomposition; for Td
+//!   those are dense and grow like `N⁷` (8 minutes at N = 64). `row_space.rs` computes the
+//!   same projection with LSQR (Golub–Kahan bidiagonalization of `Cᴴ`, the process an SVD
+//!   starts with; no normal equations), checked against a dense projection in its tests and
+//!   here against an independent SVD at small N.
 //! - Size: rows are kept only for one line per orbit of the face's stabiliser
 //!   `{Q : Qᵀℓ = ℓ}` (for symmetric `Φ` the others are the same condition times a unit
 //!   phase), rows are normalised, and the system is split into connected components of
-//!   its row–column graph, each solved by its own dense SVD. Td rows are real
-//!   (`exp(2πi k·b) = ±1` with `b = (½,0,0)`), so Td uses the real SVD.
+//!   its row–column graph, each projected on its own. Td rows are real
+//!   (`exp(2πi k·b) = ±1` with `b = (½,0,0)`), so the real and imaginary parts of Td
+//!   coefficients are projected separately, in parallel.
 //! - Structure kept: the projector commutes with the group (the constraint set is
 //!   symmetric: it lives in the symmetric basis) and with the conjugate-partner map
 //!   `J c = conj(c_partner)` (the constraint set is invariant under it), so conjugate
@@ -51,13 +55,13 @@
 
 use std::collections::HashMap;
 
-use nalgebra::{ComplexField, DMatrix, SVD};
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 
 use super::basis::{cis_fraction, cis_turns};
 use super::fit::{Coefficient, FitError, FittedCell};
 use super::group::{Frame, Group, ReferenceElement, TETRAHEDRON_FACE_NORMALS, mat_vec};
+use super::row_space::{SparseRows, project};
 
 /// Sample points per face side for the residual (a `FACE_SAMPLES × FACE_SAMPLES` grid).
 pub const FACE_SAMPLES: usize = 32;
@@ -345,7 +349,7 @@ impl FittedCell {
     /// reference element, and a report. Returns the cell unchanged (`applied == false`) when
     /// the conditions already hold (D4, Oh, mirrored D3).
     ///
-    /// Errors: the group has no reference element; an SVD did not converge.
+    /// Errors: the group has no reference element; the projection did not converge.
     pub fn constrain_normal_to_faces(&self) -> Result<(FittedCell, ConstraintReport), FitError> {
         let group = &self.group;
         let faces = faces(group)?;
@@ -541,8 +545,7 @@ fn components(rows: &[Vec<(usize, Complex64)>], ncols: usize) -> Vec<(Vec<usize>
     out
 }
 
-/// Adds to `delta` the projection of `x` onto the row space of the block (`rs` × `cs`), from
-/// the right singular vectors of a thin SVD.
+/// Adds to `delta` the projection of `x` onto the row space of the block (`rs` × `cs`).
 fn project_block(
     rows: &[Vec<(usize, Complex64)>],
     rs: &[usize],
@@ -551,58 +554,19 @@ fn project_block(
     delta: &mut [Complex64],
 ) -> Result<(), FitError> {
     let local: HashMap<usize, usize> = cs.iter().enumerate().map(|(i, &j)| (j, i)).collect();
-    let real = rs.iter().all(|&r| rows[r].iter().all(|e| e.1.im == 0.0));
-    let (m, n) = (rs.len(), cs.len());
+    let block_rows: Vec<Vec<(usize, Complex64)>> = rs
+        .iter()
+        .map(|&r| rows[r].iter().map(|&(j, v)| (local[&j], v)).collect())
+        .collect();
+    let c = SparseRows::new(block_rows.iter().map(Vec::as_slice), cs.len());
     let xs: Vec<Complex64> = cs.iter().map(|&j| x[j]).collect();
-    let fill = |set: &mut dyn FnMut(usize, usize, Complex64)| {
-        for (i, &r) in rs.iter().enumerate() {
-            for &(j, v) in &rows[r] {
-                set(i, local[&j], v);
-            }
-        }
-    };
-    let p = if real {
-        let mut a = DMatrix::<f64>::zeros(m, n);
-        fill(&mut |i, j, v| a[(i, j)] = v.re);
-        row_space_part(a, &xs, |v| Complex64::new(v, 0.0))?
-    } else {
-        let mut a = DMatrix::<Complex64>::zeros(m, n);
-        fill(&mut |i, j, v| a[(i, j)] = v);
-        row_space_part(a, &xs, |v| v)?
-    };
+    let p = project(&c, &xs).map_err(|e| FitError::ConstraintNotConverged {
+        rows: e.rows,
+        cols: e.cols,
+        relative: e.relative,
+    })?;
     for (i, &j) in cs.iter().enumerate() {
         delta[j] += p[i];
     }
     Ok(())
-}
-
-/// `V_r V_rᴴ x` for the right singular vectors of `a` above the rank tolerance.
-fn row_space_part<T: ComplexField<RealField = f64>>(
-    a: DMatrix<T>,
-    x: &[Complex64],
-    to_c: impl Fn(T) -> Complex64,
-) -> Result<Vec<Complex64>, FitError> {
-    let (m, n) = a.shape();
-    let dim = m.min(n);
-    let svd = SVD::try_new(a, false, true, f64::EPSILON, 200 * dim + 1000)
-        .ok_or(FitError::ConstraintSvd { rows: m, cols: n })?;
-    let v_t = svd
-        .v_t
-        .as_ref()
-        .ok_or(FitError::ConstraintSvd { rows: m, cols: n })?;
-    let smax = svd.singular_values.iter().fold(0.0f64, |a, &s| a.max(s));
-    let tol = smax * m.max(n) as f64 * f64::EPSILON;
-    let mut out = vec![Complex64::new(0.0, 0.0); n];
-    for (i, &s) in svd.singular_values.iter().enumerate() {
-        if s <= tol {
-            continue;
-        }
-        // Row i of Vᴴ is v_iᴴ: coefficient v_iᴴ x, then add it times v_i = conj(row).
-        let row: Vec<Complex64> = (0..n).map(|j| to_c(v_t[(i, j)].clone())).collect();
-        let a: Complex64 = row.iter().zip(x).map(|(r, xj)| r * xj).sum();
-        for (o, r) in out.iter_mut().zip(&row) {
-            *o += r.conj() * a;
-        }
-    }
-    Ok(out)
 }

@@ -92,8 +92,14 @@ pub enum FitError {
         "the face-normal constraint needs a reference element; the group {group} has none (only D3, D4, Td and Oh)"
     )]
     NoReferenceElement { group: String },
-    #[error("the SVD of the face-normal constraint system did not converge ({rows}×{cols} block)")]
-    ConstraintSvd { rows: usize, cols: usize },
+    #[error(
+        "the face-normal constraint did not converge ({rows}×{cols} block, relative violation {relative:.1e})"
+    )]
+    ConstraintNotConverged {
+        rows: usize,
+        cols: usize,
+        relative: f64,
+    },
     #[error(
         "automatic N: the tolerance must be finite and positive, and max_n at least 64 (two sizes to compare); got tolerance {tolerance}, max_n {max_n}"
     )]

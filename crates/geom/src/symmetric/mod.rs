@@ -16,7 +16,8 @@
 //!   (private `sampler` module), so the contourer can mesh rich fits.
 //! - [`blend`] — weighted averages and Minkowski sum/difference.
 //! - [`constrain`] — the face-normal constraint `∇Φ·n = 0` on the reference element's faces
-//!   (METHOD.md §6): a least-change projection of the coefficients by SVD.
+//!   (METHOD.md §6): a least-change projection of the coefficients
+//!   (`row_space.rs`: LSQR on the sparse constraint rows).
 //! - [`auto`] — automatic `N`: double until the zero set moves less than a tolerance.
 //! - `fft` (private) — realfft along x (contiguous), rustfft along y and z, rayon across
 //!   planes and rows.
@@ -38,6 +39,7 @@ mod fft;
 pub mod fit;
 pub mod frequency;
 pub mod group;
+mod row_space;
 mod sampler;
 
 pub use auto::{AUTO_START_N, PROBE_N, fit_auto, surface_movement};
