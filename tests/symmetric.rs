@@ -155,3 +155,47 @@ fn fitted_outputs_are_watertight_and_td_element_is_closed() {
         .expect("block");
     assert!((block["volume_fraction"].as_f64().expect("fraction") - 0.5).abs() < 0.003);
 }
+
+#[test]
+fn a_2d_cell_over_a_planar_domain_gives_its_periodic_region() {
+    // cos a + cos b + ½ cos a cos b is band-limited and D4-symmetric: the fit reproduces it, so
+    // the area fraction over whole periods is that of the formula (midpoint quadrature below).
+    let p = Project::new(
+        r#"
+[cells.sq]
+expr = "cos(tau*x) + cos(tau*y) + 0.5*cos(tau*x)*cos(tau*y)"
+symmetry = "D4"
+fit = { n = 16 }
+
+[outputs.panel]
+cell = "sq"
+domain = { min = [0, 0], max = [3, 2] }
+cell_size = 0.5
+samples = [241, 161]
+formats = ["ply"]
+"#,
+    );
+    let reports = p.build(&[]);
+    let r = &reports[0];
+    assert_eq!(r["planar"], true);
+    assert_eq!(r["manifold"], true);
+    let m = 1000;
+    let cos: Vec<f64> = (0..m)
+        .map(|i| (std::f64::consts::TAU * (i as f64 + 0.5) / m as f64).cos())
+        .collect();
+    let inside = cos
+        .iter()
+        .flat_map(|a| cos.iter().map(move |b| a + b + 0.5 * a * b))
+        .filter(|&v| v <= 0.0)
+        .count();
+    let exact = inside as f64 / (m * m) as f64;
+    let fraction = r["volume_fraction"].as_f64().expect("fraction");
+    assert!((fraction - exact).abs() < 2e-3, "{fraction} vs {exact}");
+    // The region lies in z = 0 and reaches the side x = 3 (there Φ = 1 + 1.5 cos b ≤ 0 where
+    // cos b ≤ −⅔); the SVG is written next to the mesh.
+    assert_eq!(r["bbox"]["max"][2], 0.0);
+    assert!((r["bbox"]["max"][0].as_f64().unwrap() - 3.0).abs() < 1e-6);
+    let svg = std::fs::read_to_string(p.out("panel.svg")).expect("svg");
+    assert!(svg.starts_with("<svg") && svg.contains("<path"));
+    assert!(p.out("panel.ply").exists());
+}

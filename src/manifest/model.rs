@@ -109,6 +109,9 @@ pub struct Output {
     /// triangle or tetrahedron; cell size 1, centroid at the origin) instead of a periodic box.
     /// The domain is then the element's bounding box and `cell_size` is 1.
     pub over_element: bool,
+    /// The domain was given as `[x, y]` corners: the region `Φ ≤ 0` of a 2D cell over a
+    /// rectangle in the plane z = 0 (a planar mesh and an SVG), not a box.
+    pub planar_domain: bool,
     pub domain_min: [f64; 3],
     pub domain_max: [f64; 3],
     /// Model units per period of the cell, per axis.

@@ -267,12 +267,26 @@ impl Checker<'_, '_, '_> {
                 }
                 let cell = cell.as_deref();
                 cell.and_then(|cell| self.element_box(name, over, cell, valid_cells))
+                    .map(|(min, max)| Domain {
+                        min,
+                        max,
+                        planar: false,
+                    })
             }
         };
+        let planar = domain.as_ref().is_some_and(|d| d.planar);
+        if planar && let (Some(cell), Some((_, value))) = (cell.as_deref(), fields.get("domain")) {
+            self.check_planar_cell(name, value, cell, valid_cells);
+        }
         let over_element = over.is_some_and(|(_, element)| element == Some(true));
         let cell_size = match fields.get("cell_size") {
             _ if over_element => Some([1.0; 3]),
             None => Some([1.0; 3]),
+            Some((_, v)) if planar && is_pair(v) => {
+                self.pair(&path("cell_size"), v, 1.0, |s, k, v, expected| {
+                    s.positive_number(k, v, expected)
+                })
+            }
             Some((_, v)) => self.scalar_or_vec3(
                 &path("cell_size"),
                 v,
@@ -281,7 +295,7 @@ impl Checker<'_, '_, '_> {
             ),
         };
         let solid = self.solid(name, &header, &within, &fields);
-        let samples = self.samples(name, &header, &within, &fields, domain);
+        let samples = self.samples(name, &header, &within, &fields, domain.as_ref(), planar);
         let formats = self.formats(&path("formats"), fields.get("formats"));
         let encoding = match fields.get("ascii") {
             None => Some(Encoding::Binary),
@@ -301,16 +315,23 @@ impl Checker<'_, '_, '_> {
         if self.report.len() > before {
             return None;
         }
-        let (domain_min, domain_max) = domain?;
+        let domain = domain?;
+        let (mut cell_size, mut samples) = (cell_size?, samples?);
+        if domain.planar {
+            // z has no extent in the plane: fixed values keep cache keys independent of it.
+            cell_size[2] = 1.0;
+            samples[2] = 2;
+        }
         Some(Output {
             name: self.name(key),
             cell: cell?,
             over_element,
-            domain_min,
-            domain_max,
-            cell_size: cell_size?,
+            planar_domain: domain.planar,
+            domain_min: domain.min,
+            domain_max: domain.max,
+            cell_size,
             solid: solid?,
-            samples: samples?,
+            samples,
             formats: formats?,
             encoding: encoding?,
             stem: stem?,
@@ -384,7 +405,7 @@ impl Checker<'_, '_, '_> {
         header: &Range<usize>,
         within: &str,
         output_fields: &Fields<'_, '_>,
-    ) -> Option<([f64; 3], [f64; 3])> {
+    ) -> Option<Domain> {
         let example = "{ min = [0, 0, 0], max = [1, 1, 1] }";
         let Some((_, value)) = output_fields.get("domain") else {
             let help = format!("add `domain = {example}` (the box to fill, in model units)");
@@ -409,13 +430,24 @@ impl Checker<'_, '_, '_> {
                 self.missing(&fields, &value.span(), corner, &within, &label, &help);
                 return None;
             };
-            self.vec3_numbers(&format!("{key}.{corner}"), v)
+            self.point_numbers(&format!("{key}.{corner}"), v)
         };
         let min = corner("min");
         let max = corner("max");
         let ((min, min_values), (max, max_values)) = (min?, max?);
+        if min_values.len() != max_values.len() {
+            let (min_len, max_len) = (min_values.len(), max_values.len());
+            self.error(
+                value.span(),
+                &format!("`{key}.min` and `{key}.max` differ in length"),
+                &format!("`min` has {min_len} values, `max` has {max_len}"),
+                Some("give both corners as [x, y] for a planar domain, or both as [x, y, z]"),
+            );
+            return None;
+        }
+        let planar = min_values.len() == 2;
         let mut ok = true;
-        for axis in 0..3 {
+        for axis in 0..min_values.len() {
             // Both are finite here (non-finite numbers were rejected), so `>=` is `!(<)`.
             if min[axis] >= max[axis] {
                 ok = false;
@@ -428,7 +460,7 @@ impl Checker<'_, '_, '_> {
                 );
             }
         }
-        ok.then_some((min, max))
+        ok.then_some(Domain { min, max, planar })
     }
 
     fn solid(
@@ -527,7 +559,8 @@ impl Checker<'_, '_, '_> {
         header: &Range<usize>,
         within: &str,
         fields: &Fields<'_, '_>,
-        domain: Option<([f64; 3], [f64; 3])>,
+        domain: Option<&Domain>,
+        planar: bool,
     ) -> Option<[usize; 3]> {
         let path = |k: &str| format!("outputs.{output}.{k}");
         match (fields.get("samples"), fields.get("voxel")) {
@@ -558,6 +591,9 @@ impl Checker<'_, '_, '_> {
                 );
                 None
             }
+            (Some((_, v)), None) if planar && is_pair(v) => {
+                self.pair(&path("samples"), v, 2, Self::sample_count)
+            }
             (Some((_, v)), None) => {
                 let counts = self.scalar_or_vec3(
                     &path("samples"),
@@ -570,7 +606,7 @@ impl Checker<'_, '_, '_> {
             (None, Some((_, v))) => {
                 let key = path("voxel");
                 let voxel = self.positive_number(&key, v, "a number")?;
-                let (min, max) = domain?;
+                let (min, max) = domain.map(|d| (d.min, d.max))?;
                 let mut counts = [0; 3];
                 for axis in 0..3 {
                     let ratio = (max[axis] - min[axis]) / voxel;
@@ -795,6 +831,21 @@ impl Checker<'_, '_, '_> {
         None
     }
 
+    /// An array of 2 (x, y) for a planar domain, completed with `z`.
+    fn pair<T: Copy>(
+        &mut self,
+        key: &str,
+        value: &Value<'_>,
+        z: T,
+        mut item: impl FnMut(&mut Self, &str, &Value<'_>, &str) -> Option<T>,
+    ) -> Option<[T; 3]> {
+        let DeValue::Array(items) = value.get_ref() else {
+            return None;
+        };
+        let [x, y] = [&items[0], &items[1]].map(|v| item(self, key, v, "a number"));
+        Some([x?, y?, z])
+    }
+
     /// A scalar (used on every axis) or an array of exactly 3. `expected` is the description
     /// of one element and of the whole value, for type errors.
     fn scalar_or_vec3<T: Copy>(
@@ -815,23 +866,40 @@ impl Checker<'_, '_, '_> {
         Some([x?, y?, z?])
     }
 
-    /// An array of exactly 3 numbers, with each element's value for citing it later.
-    fn vec3_numbers<'t, 'i>(
+    /// A point of 2 (planar, z = 0) or 3 numbers, with each element's value for citing it.
+    fn point_numbers<'t, 'i>(
         &mut self,
         key: &str,
         value: &'t Value<'i>,
-    ) -> Option<([f64; 3], [&'t Value<'i>; 3])> {
+    ) -> Option<([f64; 3], Vec<&'t Value<'i>>)> {
         let DeValue::Array(items) = value.get_ref() else {
-            self.wrong_type(key, value, "an array of 3 numbers", None);
+            self.wrong_type(
+                key,
+                value,
+                "an array of 3 numbers (or 2, in the plane)",
+                None,
+            );
             return None;
         };
-        if items.len() != 3 {
-            self.wrong_length(key, value, items.len());
+        if items.len() != 2 && items.len() != 3 {
+            self.error(
+                value.span(),
+                &format!("`{key}` must have 3 values (x, y, z), or 2 (x, y) in the plane"),
+                &format!("found {}", items.len()),
+                None,
+            );
             return None;
         }
-        let values = [&items[0], &items[1], &items[2]];
-        let [x, y, z] = values.map(|v| self.finite_number(key, v));
-        Some(([x?, y?, z?], values))
+        let values: Vec<&Value<'i>> = items.iter().collect();
+        let mut point = [0.0; 3];
+        let mut ok = true;
+        for (axis, v) in values.iter().enumerate() {
+            match self.finite_number(key, v) {
+                Some(x) => point[axis] = x,
+                None => ok = false,
+            }
+        }
+        ok.then_some((point, values))
     }
 
     // ---- names and keys --------------------------------------------------------------------
@@ -959,6 +1027,18 @@ impl Checker<'_, '_, '_> {
             .unwrap_or_default()
             .to_string()
     }
+}
+
+/// An output's box: `planar` when its corners were given as `[x, y]` (then z is 0).
+struct Domain {
+    min: [f64; 3],
+    max: [f64; 3],
+    planar: bool,
+}
+
+/// Whether a value is an array of exactly two items.
+fn is_pair(value: &Value<'_>) -> bool {
+    matches!(value.get_ref(), DeValue::Array(items) if items.len() == 2)
 }
 
 /// Names as a list for help texts: `a`, `b`, `c`.

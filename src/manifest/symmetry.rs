@@ -1149,6 +1149,40 @@ impl Checker<'_, '_, '_> {
         None
     }
 
+    /// A planar domain (`[x, y]` corners) is the plane of a 2D cell: reports any other cell.
+    pub(super) fn check_planar_cell(
+        &mut self,
+        output: &str,
+        domain: &Value<'_>,
+        cell: &str,
+        cells: &BTreeMap<String, Cell>,
+    ) {
+        let Some(found) = cells.get(cell) else {
+            return;
+        };
+        let dimension = match found.symmetric.as_ref().map(|s| &s.group) {
+            Some(GroupSpec::Named(name)) => Group::by_name(name).ok().map(|g| g.dimension()),
+            Some(GroupSpec::Generators { dimension, .. }) => Some(*dimension),
+            None => None,
+        };
+        if dimension == Some(2) {
+            return;
+        }
+        let why = match dimension {
+            None => format!("cell `{cell}` has no `symmetry`, so it is a 3D field"),
+            Some(_) => format!("cell `{cell}` has a 3D group"),
+        };
+        self.error(
+            domain.span(),
+            &format!("the planar `outputs.{output}.domain` needs a 2D cell"),
+            &why,
+            Some(
+                "give the corners as [x, y, z] to fill a box, or use a cell with a 2D \
+                 `symmetry` (`\"D3\"`, `\"D4\"` or generators with `dimension = 2`)",
+            ),
+        );
+    }
+
     /// The bounding box of the reference element of `cell` (`None` when `cell` is invalid, or
     /// reported when it has no reference element).
     pub(super) fn element_box(

@@ -309,6 +309,30 @@ error: could not load `lattice.toml` due to 2 previous errors
 ",
     },
     ErrCase {
+        name: "planar domain of a 3D cell, and corners of different lengths",
+        manifest: "[cells.a]\ntpms = \"p\"\nsymmetry = \"Oh\"\n\n[outputs.o]\ncell = \"a\"\ndomain = { min = [0, 0], max = [1, 1] }\nsamples = 32\n\n[outputs.q]\ncell = \"a\"\ndomain = { min = [0, 0], max = [1, 1, 1] }\nsamples = 32\n",
+        sets: &[],
+        expected: "\
+error: the planar `outputs.o.domain` needs a 2D cell
+ --> lattice.toml:7:10
+  |
+7 | domain = { min = [0, 0], max = [1, 1] }
+  |          ^^^^^^^^^^^^^^^^^^^^^^^^^^^^^^ cell `a` has a 3D group
+  |
+  = help: give the corners as [x, y, z] to fill a box, or use a cell with a 2D `symmetry` (`\"D3\"`, `\"D4\"` or generators with `dimension = 2`)
+
+error: `outputs.q.domain.min` and `outputs.q.domain.max` differ in length
+  --> lattice.toml:12:10
+   |
+12 | domain = { min = [0, 0], max = [1, 1, 1] }
+   |          ^^^^^^^^^^^^^^^^^^^^^^^^^^^^^^^^^ `min` has 2 values, `max` has 3
+   |
+   = help: give both corners as [x, y] for a planar domain, or both as [x, y, z]
+
+error: could not load `lattice.toml` due to 2 previous errors
+",
+    },
+    ErrCase {
         name: "misspelled over, and over a cell without symmetry",
         manifest: "[cells.a]\ntpms = \"p\"\n\n[outputs.o]\ncell = \"a\"\nover = \"elemnt\"\nsamples = 32\n\n[outputs.q]\ncell = \"a\"\nover = \"element\"\nsamples = 32\n",
         sets: &[],
@@ -604,6 +628,27 @@ fn outputs_over_the_element_take_its_bounding_box() {
         let z = if min[2] == max[2] { 2 } else { 5 };
         assert_eq!((out.samples[0], out.samples[2]), (5, z), "{group}");
     }
+}
+
+#[test]
+fn planar_domains_take_pairs_and_fix_z() {
+    let text = "[cells.a]\nexpr = \"cos(tau*x) + cos(tau*y)\"\nsymmetry = \"D4\"\n\n\
+                [outputs.o]\ncell = \"a\"\ndomain = { min = [0, -1], max = [3, 1] }\n\
+                cell_size = [0.5, 0.25]\nsamples = [61, 41]\n\n\
+                [outputs.v]\ncell = \"a\"\ndomain = { min = [0, 0], max = [2, 1] }\ncell_size = 3\nvoxel = 0.1\n";
+    let manifest = parse_ok(text, &[]);
+    let o = &manifest.outputs["o"];
+    assert!(o.planar_domain && !o.over_element);
+    assert_eq!(
+        (o.domain_min, o.domain_max),
+        ([0.0, -1.0, 0.0], [3.0, 1.0, 0.0])
+    );
+    assert_eq!(o.cell_size, [0.5, 0.25, 1.0]);
+    assert_eq!(o.samples, [61, 41, 2]);
+    let v = &manifest.outputs["v"];
+    assert!(v.planar_domain);
+    assert_eq!(v.cell_size, [3.0, 3.0, 1.0]);
+    assert_eq!(v.samples, [21, 11, 2]);
 }
 
 #[test]

@@ -898,6 +898,7 @@ fn output(name: &str, span: Option<std::ops::Range<usize>>) -> Output {
         },
         cell: "gyroid".into(),
         over_element: false,
+        planar_domain: false,
         domain_min: [0.0; 3],
         domain_max: [1.0; 3],
         cell_size: [1.0; 3],

@@ -2,7 +2,7 @@
 //! solid into a checked, watertight mesh.
 
 use latticebuild_geom::contour::contour;
-use latticebuild_geom::contour2d::{Element2, contour_planar};
+use latticebuild_geom::contour2d::{Element2, PlanarRegion, contour_planar, contour_planar_box};
 use latticebuild_geom::element::{Element3, contour_clipped};
 use latticebuild_geom::expr;
 use latticebuild_geom::field::{Grid, ScalarField, Solid, SolidField, SolidSampler};
@@ -24,6 +24,8 @@ pub struct ContourStage {
     pub fitted: Option<GroupSpec>,
     /// Clip to the cell's reference element instead of repeating it over a box.
     pub over_element: bool,
+    /// The region of a 2D cell over the rectangle `domain` in the plane z = 0.
+    pub planar_domain: bool,
     pub domain_min: [f64; 3],
     pub domain_max: [f64; 3],
     pub cell_size: [f64; 3],
@@ -40,6 +42,7 @@ impl ContourStage {
         ContourStage {
             fitted: fitted.map(|s| s.group.clone()),
             over_element: output.over_element,
+            planar_domain: output.planar_domain,
             domain_min: output.domain_min,
             domain_max: output.domain_max,
             cell_size: output.cell_size,
@@ -57,6 +60,7 @@ impl ContourStage {
         };
         key.param("fitted", self.fitted.is_some())
             .param("over_element", self.over_element)
+            .param("planar_domain", self.planar_domain)
             .param("domain.min", vec3(self.domain_min))
             .param("domain.max", vec3(self.domain_max))
             .param("cell_size", vec3(self.cell_size))
@@ -101,6 +105,8 @@ impl ContourStage {
                 None => return Err("`over = \"element\"` needs a cell with a symmetry".into()),
             };
             self.contour_element(&*field, &group, progress)?
+        } else if self.planar_domain {
+            self.contour_planar_domain(&*field)?
         } else {
             let model = Grid::spanning(self.domain_min, self.domain_max, self.samples);
             let cell_grid = model.scaled_down(self.cell_size);
@@ -119,6 +125,33 @@ impl ContourStage {
             summary,
             planar,
         })
+    }
+
+    /// The region `Φ ≤ 0` of a 2D cell repeated over the rectangle of the domain (model units;
+    /// `cell_size` model units per period).
+    fn contour_planar_domain(
+        &self,
+        field: &dyn ScalarField,
+    ) -> Result<(Mesh, Option<Planar>), String> {
+        let solid = SolidField {
+            inner: field,
+            solid: self.solid,
+        };
+        let size = self.cell_size;
+        let value = |p: [f64; 2]| {
+            let mut out = [0.0];
+            solid.eval_points(&[p[0] / size[0]], &[p[1] / size[1]], &[0.0], &mut out);
+            out[0]
+        };
+        let (min, max) = (
+            [self.domain_min[0], self.domain_min[1]],
+            [self.domain_max[0], self.domain_max[1]],
+        );
+        let region = contour_planar_box(&value, min, max, [self.samples[0], self.samples[1]])
+            .map_err(|e| e.to_string())?;
+        let outline = vec![min, [max[0], min[1]], max, [min[0], max[1]]];
+        let area = (max[0] - min[0]) * (max[1] - min[1]);
+        Ok(planar_output(region, outline, area))
     }
 
     /// The cell clipped to its reference element: a closed mesh for the cube and the
@@ -141,12 +174,7 @@ impl ContourStage {
                 out[0]
             };
             let region = contour_planar(&value, element, samples).map_err(|e| e.to_string())?;
-            let outline = Planar {
-                boundary: region.boundary.clone(),
-                element: element.outline(),
-                element_area: element.area(),
-            };
-            Ok((region.mesh, Some(outline)))
+            Ok(planar_output(region, element.outline(), element.area()))
         };
         let advance = |n: usize| progress.advance(n);
         match group.reference_element() {
@@ -168,4 +196,15 @@ impl ContourStage {
             )),
         }
     }
+}
+
+/// A planar region's mesh, and its outline inside `frame` (the element or the domain) for the
+/// SVG and the report.
+fn planar_output(region: PlanarRegion, frame: Vec<[f64; 2]>, area: f64) -> (Mesh, Option<Planar>) {
+    let planar = Planar {
+        boundary: region.boundary,
+        element: frame,
+        element_area: area,
+    };
+    (region.mesh, Some(planar))
 }

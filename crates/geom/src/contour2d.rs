@@ -5,7 +5,9 @@
 //! pointing to +y, vertices `(-½, -√3/6)`, `(½, -√3/6)`, `(0, √3/3)`.
 //!
 //! [`contour_planar`] returns the region `{Φ ≤ 0} ∩ element` (negative inside) as a
-//! [`PlanarRegion`]: a triangle mesh in the plane `z = 0` and its boundary loops.
+//! [`PlanarRegion`]: a triangle mesh in the plane `z = 0` and its boundary loops;
+//! [`contour_planar_box`] does the same over an axis-aligned rectangle (a periodic 2D cell
+//! repeated over a planar domain).
 //!
 //! The face rule is the one the 3D tables use on cube faces (see
 //! [`crate::contour::table`]): in each grid cell the inside part is bounded by segments
@@ -186,14 +188,47 @@ pub fn contour_planar(
             }
         }
     };
+    Ok(region_of(&lattice, field))
+}
+
+/// Contours `{Φ ≤ 0}` over the rectangle `[min, max]` sampled at `counts` points per axis (at
+/// least 2 each); the rectangle's sides are the grid's boundary, so the region is capped there
+/// exactly as on the square element.
+pub fn contour_planar_box(
+    field: &(dyn Fn([f64; 2]) -> f64 + Sync),
+    min: [f64; 2],
+    max: [f64; 2],
+    counts: [usize; 2],
+) -> Result<PlanarRegion, PlanarError> {
+    let fewest = counts[0].min(counts[1]);
+    if fewest < 2 {
+        return Err(PlanarError::TooFewSamples(fewest));
+    }
+    let nodes = (counts[0] as u64 + 1).saturating_mul(counts[1] as u64 + 1);
+    if nodes.saturating_mul(3) >= u64::from(u32::MAX) {
+        return Err(PlanarError::TooManySamples(counts[0].max(counts[1])));
+    }
+    let lattice = Lattice {
+        origin: min,
+        axes: [
+            [(max[0] - min[0]) / (counts[0] - 1) as f64, 0.0],
+            [0.0, (max[1] - min[1]) / (counts[1] - 1) as f64],
+        ],
+        counts,
+        clip_triangle: false,
+    };
+    Ok(region_of(&lattice, field))
+}
+
+fn region_of(lattice: &Lattice, field: &(dyn Fn([f64; 2]) -> f64 + Sync)) -> PlanarRegion {
     let values = lattice.sample(field);
-    let (mesh, positions) = march(&lattice, &values);
+    let (mesh, positions) = march(lattice, &values);
     let boundary = boundary_loops(&mesh, &positions);
-    Ok(PlanarRegion {
+    PlanarRegion {
         mesh,
         positions,
         boundary,
-    })
+    }
 }
 
 /// A parallelogram grid: node `(i, j)` sits at `origin + i·axes[0] + j·axes[1]`.

@@ -1,7 +1,9 @@
 //! Planar contouring in the 2D reference elements: exact element areas, closed and oriented
 //! boundary loops that are exactly the mesh's boundary edges, and the SVG drawing.
 
-use latticebuild_geom::contour2d::{Element2, PlanarError, PlanarRegion, contour_planar};
+use latticebuild_geom::contour2d::{
+    Element2, PlanarError, PlanarRegion, contour_planar, contour_planar_box,
+};
 use latticebuild_geom::mesh_io::write_svg;
 use latticebuild_geom::validate::check;
 use std::collections::{HashMap, HashSet};
@@ -283,4 +285,45 @@ fn contour2d_svg_draws_every_loop_in_one_evenodd_path() {
     let mut none = Vec::new();
     assert!(write_svg(&PlanarRegion::default(), &bad, &mut none).is_err());
     assert!(none.is_empty(), "nothing written on bad input");
+}
+
+#[test]
+fn contour2d_box_of_discs_caps_on_the_rectangle() {
+    // Discs of radius 0.3 on the unit lattice, over [0.2, 3.2] × [0, 2] (cut through discs
+    // on every side): the area is that of the lattice pattern restricted to the rectangle,
+    // computed here by fine midpoint quadrature.
+    let field = |p: [f64; 2]| {
+        let (dx, dy) = (p[0] - p[0].round(), p[1] - p[1].round());
+        dx.hypot(dy) - 0.3
+    };
+    let (min, max) = ([0.2, 0.0], [3.2, 2.0]);
+    let r = contour_planar_box(&field, min, max, [241, 161]).unwrap();
+    let m = 3000;
+    let mut inside = 0usize;
+    for i in 0..m {
+        for j in 0..m {
+            let x = min[0] + (max[0] - min[0]) * (i as f64 + 0.5) / m as f64;
+            let y = min[1] + (max[1] - min[1]) * (j as f64 + 0.5) / m as f64;
+            inside += usize::from(field([x, y]) <= 0.0);
+        }
+    }
+    let exact = 6.0 * inside as f64 / (m * m) as f64;
+    assert!(
+        (r.area() - exact).abs() / exact < 2e-3,
+        "{} vs {exact}",
+        r.area()
+    );
+    let loops = assert_consistent(&r, "box of discs");
+    // Every region loop is counter-clockwise (no holes) and stays in the rectangle.
+    assert!(loops.iter().all(|&a| a > 0.0), "{loops:?}");
+    for p in r.boundary.iter().flatten() {
+        assert!(p[0] >= min[0] - 1e-12 && p[0] <= max[0] + 1e-12, "{p:?}");
+        assert!(p[1] >= min[1] - 1e-12 && p[1] <= max[1] + 1e-12, "{p:?}");
+    }
+    // One loop per disc meeting the rectangle: centres x ∈ {0, 1, 2, 3} × y ∈ {0, 1, 2}.
+    assert_eq!(loops.len(), 12);
+    assert!(matches!(
+        contour_planar_box(&field, min, max, [1, 5]),
+        Err(PlanarError::TooFewSamples(1))
+    ));
 }
