@@ -228,6 +228,10 @@ impl<'a> Builder<'a> {
         for &id in nodes {
             let started = Instant::now();
             let node = &self.graph.nodes[id];
+            if let Stage::File(file) = &node.stage {
+                self.read_file(id, file, started)?;
+                continue;
+            }
             let inputs: Vec<ContentHash> =
                 node.inputs.iter().map(|i| self.resolved[i].hash).collect();
             let (key, desc) = node.stage.key(&inputs).map_err(|e| BuildError::Stage {
@@ -311,6 +315,56 @@ impl<'a> Builder<'a> {
         Ok(())
     }
 
+    /// Reads a `file` node: its value is the file's bytes and its hash their content hash,
+    /// so what reads it is keyed on the content. Never cached (the file is the source); shown
+    /// as cached when the content is the one the previous build saw.
+    fn read_file(
+        &mut self,
+        id: NodeId,
+        file: &crate::stages::mesh::FileStage,
+        started: Instant,
+    ) -> Result<(), BuildError> {
+        let node = &self.graph.nodes[id];
+        let bytes = std::fs::read(&file.path).map_err(|e| BuildError::Stage {
+            node: node.name.clone(),
+            message: format!("cannot read `{}`: {e}", file.path.display()),
+        })?;
+        let hash = ContentHash::of(&bytes);
+        let (key, desc) = node.stage.key(&[hash]).map_err(|e| BuildError::Stage {
+            node: node.name.clone(),
+            message: format!("cannot form its cache key: {e}"),
+        })?;
+        let unchanged = self
+            .cache
+            .previous(&node.name)
+            .is_some_and(|prev| prev.key == key);
+        self.cache.record(&node.name, &key, &desc, &hash)?;
+        self.resolved.insert(
+            id,
+            Resolved {
+                key,
+                hash,
+                value: Some(Value::Bytes(Arc::new(bytes))),
+            },
+        );
+        let why = if unchanged {
+            vec![]
+        } else {
+            vec![format!("`{}` is new or changed", file.given)]
+        };
+        self.runs.insert(
+            id,
+            NodeRun {
+                node: node.name.clone(),
+                stage: node.stage.kind(),
+                cached: unchanged,
+                seconds: started.elapsed().as_secs_f64(),
+                why,
+            },
+        );
+        Ok(())
+    }
+
     /// A cache hit as `Ok((hash, value if already loaded))`, or why the node must run.
     #[allow(clippy::type_complexity)]
     fn lookup(
@@ -387,7 +441,9 @@ impl<'a> Builder<'a> {
             )),
         };
         match &node.stage {
+            Stage::File(file) => Err(format!("`{}` is read, not run", file.given)),
             Stage::Cell(stage) => Ok(Value::Bytes(Arc::new(stage.run()?))),
+            Stage::MeshCell(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
             Stage::Sample(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
             Stage::Fit(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
             Stage::Constrain(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
@@ -402,8 +458,14 @@ impl<'a> Builder<'a> {
                 let Value::Bytes(cell) = input(0) else {
                     return Err("input is not a cell".into());
                 };
+                let part = if node.inputs.len() > 1 {
+                    Some(bytes(1)?)
+                } else {
+                    None
+                };
                 let progress = self.progress.start(&node.name, stage.steps());
-                Ok(Value::Mesh(Arc::new(stage.run(&cell, &*progress)?)))
+                let mesh = stage.run(&cell, part.as_deref().map(|b| b.as_slice()), &*progress)?;
+                Ok(Value::Mesh(Arc::new(mesh)))
             }
             Stage::Write(stage) => {
                 let Value::Mesh(mesh) = input(0) else {
@@ -454,7 +516,9 @@ impl<'a> Builder<'a> {
 
 fn decode(stage: &Stage, payload: Vec<u8>) -> Result<Value, String> {
     match stage {
-        Stage::Cell(_)
+        Stage::File(_)
+        | Stage::Cell(_)
+        | Stage::MeshCell(_)
         | Stage::Sample(_)
         | Stage::Fit(_)
         | Stage::Combine(_)

@@ -10,8 +10,9 @@ pub mod status;
 
 use std::collections::BTreeMap;
 
-use crate::manifest::{CellSource, FitResolution, Manifest};
+use crate::manifest::{CellSource, FitResolution, Manifest, MeshFile};
 use crate::stages::Stage;
+use crate::stages::mesh::{FileStage, MeshCellStage};
 use crate::stages::symmetric::{Combination, CombineStage, ConstrainStage, FitStage, SampleStage};
 
 /// Index of a node in [`Graph::nodes`].
@@ -67,14 +68,43 @@ impl CellCompiler<'_> {
         Ok(id)
     }
 
+    /// The `file:` node of a mesh file, once per file name.
+    fn file(&mut self, graph: &mut Graph, file: &MeshFile) -> NodeId {
+        let node = format!("file:{}", file.given);
+        if let Some(&id) = self.done.get(&node) {
+            return id;
+        }
+        let stage = Stage::File(FileStage {
+            given: file.given.clone(),
+            path: file.path.clone(),
+        });
+        let id = graph.push(node.clone(), stage, vec![]);
+        self.done.insert(node, id);
+        id
+    }
+
+    /// The `cell:` node of a formula or mesh cell: its canonical formula, or its placed mesh
+    /// (reading the `file:` node).
+    fn source(&mut self, graph: &mut Graph, name: &str) -> NodeId {
+        let cell = &self.manifest.cells[name];
+        match &cell.source {
+            CellSource::Mesh(mesh) => {
+                let file = self.file(graph, &mesh.file);
+                let stage = Stage::MeshCell(MeshCellStage { cell: mesh.clone() });
+                graph.push(format!("cell:{name}"), stage, vec![file])
+            }
+            _ => graph.push(format!("cell:{name}"), Stage::cell(cell), vec![]),
+        }
+    }
+
     fn compile(&mut self, graph: &mut Graph, name: &str) -> Result<NodeId, Cycle> {
         let cell = &self.manifest.cells[name];
         let Some(spec) = &cell.symmetric else {
-            return Ok(graph.push(format!("cell:{name}"), Stage::cell(cell), vec![]));
+            return Ok(self.source(graph, name));
         };
         let fitted = match &cell.source {
-            CellSource::Tpms(_) | CellSource::Expr(_) => {
-                let formula = graph.push(format!("cell:{name}"), Stage::cell(cell), vec![]);
+            CellSource::Tpms(_) | CellSource::Expr(_) | CellSource::Mesh(_) => {
+                let formula = self.source(graph, name);
                 let fit = Stage::Fit(FitStage { spec: spec.clone() });
                 match spec.n {
                     FitResolution::Fixed(n) => {
@@ -133,8 +163,9 @@ pub struct Cycle(pub Vec<String>);
 
 impl Graph {
     /// Compiles the manifest: the nodes of every cell an output uses (a `cell` node for plain
-    /// cells; `cell → sample → fit → constrain`, or `blend`/`minkowski → constrain`, for
-    /// symmetric ones), then a `contour` and a `write` node per output.
+    /// cells, reading a `file` node for mesh cells; `cell → sample → fit → constrain`, or `blend`/`minkowski → constrain`, for
+    /// symmetric ones), then a `contour` (reading the part's `file` node too with `within`) and
+    /// a `write` node per output.
     pub fn compile(manifest: &Manifest) -> Result<Graph, Cycle> {
         let mut graph = Graph::default();
         let mut compiler = CellCompiler {
@@ -145,10 +176,14 @@ impl Graph {
         for (name, output) in &manifest.outputs {
             let cell_node = compiler.node(&mut graph, &output.cell)?;
             let fitted = manifest.cells[&output.cell].symmetric.as_ref();
+            let mut inputs = vec![cell_node];
+            if let Some(part) = &output.within {
+                inputs.push(compiler.file(&mut graph, part));
+            }
             let contour = graph.push(
                 format!("contour:{name}"),
                 Stage::contour(output, fitted),
-                vec![cell_node],
+                inputs,
             );
             let write = graph.push(format!("write:{name}"), Stage::write(output), vec![contour]);
             graph.outputs.insert(name.clone(), write);

@@ -33,10 +33,15 @@ pub use model::*;
 
 use source::{Report, Sources};
 
+
 /// Reads and validates the manifest at `path`, with `--set` overrides applied.
 pub fn load(path: &Path, overrides: &[String]) -> Result<Manifest, Vec<Diagnostic>> {
     match std::fs::read_to_string(path) {
-        Ok(text) => parse(&text, path, overrides),
+        Ok(text) => {
+            let manifest = parse(&text, path, overrides)?;
+            check_input_files(&manifest, &text, path, overrides)?;
+            Ok(manifest)
+        }
         Err(err) => {
             let name = path.display().to_string();
             Err(vec![
@@ -45,6 +50,49 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Manifest, Vec<Diagnosti
                     .with_origin(name),
             ])
         }
+    }
+}
+
+/// Every mesh file the manifest names must be a readable file: one error per missing file,
+/// pointing at where it is named. (Its contents are read, and checked, by the build.)
+fn check_input_files(
+    manifest: &Manifest,
+    text: &str,
+    path: &Path,
+    overrides: &[String],
+) -> Result<(), Vec<Diagnostic>> {
+    let sources = Sources::new(path.display().to_string(), text, overrides);
+    let mut report = Report::new(&sources);
+    let named = manifest
+        .cells
+        .iter()
+        .filter_map(|(name, c)| match &c.source {
+            CellSource::Mesh(m) => Some((format!("cells.{name}.mesh"), &m.file)),
+            _ => None,
+        })
+        .chain(manifest.outputs.iter().filter_map(|(name, o)| {
+            o.within
+                .as_ref()
+                .map(|f| (format!("outputs.{name}.within"), f))
+        }));
+    for (key, file) in named {
+        let problem = match std::fs::metadata(&file.path) {
+            Ok(meta) if meta.is_file() => continue,
+            Ok(_) => "it is not a file".to_string(),
+            Err(err) => err.to_string(),
+        };
+        let diag = Diagnostic::error(format!("cannot read the mesh `{}` of `{key}`", file.given))
+            .with_label(problem)
+            .with_help(format!(
+                "file names are relative to the manifest's directory; this one is `{}`",
+                file.path.display()
+            ));
+        report.at(&file.span, diag);
+    }
+    if report.is_empty() {
+        Ok(())
+    } else {
+        Err(report.finish())
     }
 }
 

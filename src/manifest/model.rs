@@ -54,6 +54,36 @@ pub enum CellSource {
     },
     /// Minkowski sum or difference of two symmetric cells of one group.
     Minkowski { op: MinkowskiOp, cells: [String; 2] },
+    /// The solid of a triangle mesh file, in the cell's reference frame.
+    Mesh(MeshCell),
+}
+
+/// A triangle mesh file named in the manifest (`mesh = …`, `within = …`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshFile {
+    /// As written in the manifest (shown in messages).
+    pub given: String,
+    /// Resolved against the manifest's directory.
+    pub path: PathBuf,
+    /// Byte span of the value (in the manifest text, or past it in a `--set` argument).
+    pub span: Range<usize>,
+}
+
+/// A cell whose solid is a triangle mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshCell {
+    pub file: MeshFile,
+    /// `fit`: scale and centre the mesh's bounding box into the reference cell; otherwise the
+    /// mesh is already in the reference frame (centre at the origin, size 1).
+    pub fit_placement: bool,
+    /// What is sampled: signed distances, or only inside (−1) / outside (+1).
+    pub sampling: MeshSampling,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshSampling {
+    SignedDistance,
+    Containment,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -124,4 +154,10 @@ pub struct Output {
     pub encoding: Encoding,
     /// Output path stem relative to `out_dir` (default: the output's name).
     pub stem: String,
+    /// `within = "part.stl"`: the lattice is intersected with the solid of this mesh (model
+    /// units).
+    pub within: Option<MeshFile>,
+    /// `skin = t`: a closed skin of thickness `t` (model units) along the part's surface;
+    /// only with `within`.
+    pub skin: Option<f64>,
 }

@@ -28,17 +28,22 @@ use crate::diagnostics::Diagnostic;
 
 #[path = "symmetry.rs"]
 mod symmetry;
+#[path = "meshes.rs"]
+mod meshes;
 
 type Key<'i> = Spanned<DeString<'i>>;
 type Value<'i> = Spanned<DeValue<'i>>;
 
 const TOP_KEYS: [&str; 3] = ["build", "cells", "outputs"];
 const BUILD_KEYS: [&str; 1] = ["out_dir"];
-const CELL_KEYS: [&str; 11] = [
+const CELL_KEYS: [&str; 14] = [
     "tpms",
     "expr",
     "blend",
     "minkowski",
+    "mesh",
+    "placement",
+    "sample",
     "symmetry",
     "fit",
     "extend",
@@ -47,7 +52,7 @@ const CELL_KEYS: [&str; 11] = [
     "offset",
     "invert",
 ];
-const OUTPUT_KEYS: [&str; 12] = [
+const OUTPUT_KEYS: [&str; 14] = [
     "cell",
     "over",
     "domain",
@@ -60,6 +65,8 @@ const OUTPUT_KEYS: [&str; 12] = [
     "formats",
     "ascii",
     "path",
+    "within",
+    "skin",
 ];
 const DOMAIN_KEYS: [&str; 2] = ["min", "max"];
 const SOLIDS: [&str; 4] = ["inside", "outside", "shell", "eccentric_shell"];
@@ -78,8 +85,8 @@ pub(crate) fn expects_string(path: &[&str]) -> bool {
     matches!(
         path,
         ["build", "out_dir"]
-            | ["cells", _, "tpms" | "expr" | "extend"]
-            | ["outputs", _, "cell" | "over" | "solid" | "path"]
+            | ["cells", _, "tpms" | "expr" | "extend" | "mesh" | "placement" | "sample"]
+            | ["outputs", _, "cell" | "over" | "solid" | "path" | "within"]
     )
 }
 
@@ -102,7 +109,14 @@ pub(crate) fn validate(
     manifest_path: &Path,
     report: &mut Report<'_, '_>,
 ) -> Option<Manifest> {
-    let mut checker = Checker { report };
+    let dir = match manifest_path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let mut checker = Checker {
+        report,
+        root: dir.clone(),
+    };
     let mut out_dir = Some("out".to_string());
     let mut cells_table = None;
     let mut outputs_table = None;
@@ -149,10 +163,6 @@ pub(crate) fn validate(
     if !checker.report.is_empty() {
         return None;
     }
-    let root = match manifest_path.parent() {
-        Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
     // `out`, not `./out`, for a manifest in the current directory: paths in reports read better.
     let out_dir = match manifest_path.parent() {
         Some(parent) if !parent.as_os_str().is_empty() => parent.join(out_dir?),
@@ -161,10 +171,10 @@ pub(crate) fn validate(
     Some(Manifest {
         path: manifest_path.to_path_buf(),
         out_dir,
-        root,
+        root: dir,
+        inputs: meshes::input_files(&cells, &outputs),
         cells,
         outputs,
-        inputs: Vec::new(),
     })
 }
 
@@ -192,6 +202,8 @@ impl<'t, 'i> Fields<'t, 'i> {
 
 struct Checker<'r, 's, 'a> {
     report: &'r mut Report<'s, 'a>,
+    /// The manifest's directory: relative file names resolve against it.
+    root: PathBuf,
 }
 
 impl Checker<'_, '_, '_> {
@@ -311,6 +323,7 @@ impl Checker<'_, '_, '_> {
             None => Some(name.to_string()),
             Some((_, v)) => self.stem(&path("path"), v),
         };
+        let (within, skin) = self.within(name, &fields, over_element, planar);
 
         if self.report.len() > before {
             return None;
@@ -335,6 +348,8 @@ impl Checker<'_, '_, '_> {
             formats: formats?,
             encoding: encoding?,
             stem: stem?,
+            within: within?,
+            skin: skin?,
         })
     }
 

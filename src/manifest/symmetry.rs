@@ -33,7 +33,7 @@ use super::{Checker, Fields, Key, Value, list};
 /// The named groups, in their canonical spelling.
 pub(super) const GROUP_NAMES: [&str; 4] = ["D3", "D4", "Td", "Oh"];
 /// The keys that give a cell its shape; a cell has exactly one.
-pub(super) const SOURCE_KEYS: [&str; 4] = ["tpms", "expr", "blend", "minkowski"];
+pub(super) const SOURCE_KEYS: [&str; 5] = ["tpms", "expr", "blend", "minkowski", "mesh"];
 /// The keys of a fitted cell other than `symmetry`, in the order they are documented.
 pub(super) const SYMMETRIC_KEYS: [&str; 6] = [
     "fit",
@@ -172,7 +172,7 @@ impl Checker<'_, '_, '_> {
                     self.error(
                         header.clone(),
                         &format!("cell `{name}` has no source"),
-                        "expected `tpms`, `expr`, `blend` or `minkowski`",
+                        "expected `tpms`, `expr`, `mesh`, `blend` or `minkowski`",
                         Some(
                             "add `tpms = \"gyroid\"` for a library surface or \
                              `expr = \"...\"` for a formula in x, y, z",
@@ -278,11 +278,19 @@ impl Checker<'_, '_, '_> {
             None => Some(0.0),
             Some(v) => self.finite_number(&path("offset"), v),
         };
+        let is_mesh = matches!(source, Some((CellSource::Mesh(_), _)))
+            || given.iter().any(|(k, ..)| *k == "mesh");
+        let mesh_options = self.mesh_options(name, &fields, is_mesh);
 
         if self.report.len() > before {
             return None;
         }
-        let (source, _) = source?;
+        let (mut source, _) = source?;
+        if let (CellSource::Mesh(mesh), Some((fit_placement, sampling))) = (&mut source, mesh_options)
+        {
+            mesh.fit_placement = fit_placement;
+            mesh.sampling = sampling;
+        }
         let (references, combination) = match &source {
             CellSource::Blend { .. } | CellSource::Minkowski { .. } => {
                 let (refs, span) = references_of(&fields);
@@ -317,6 +325,7 @@ impl Checker<'_, '_, '_> {
             "tpms" => self.tpms_name(cell, value).map(CellSource::Tpms),
             "expr" => self.expression(cell, value).map(CellSource::Expr),
             "blend" => self.blend(cell, value, cells),
+            "mesh" => self.mesh_source(cell, value),
             _ => self.minkowski(cell, value, cells),
         }
     }
@@ -335,6 +344,12 @@ impl Checker<'_, '_, '_> {
         }
         let shown = group.describe();
         match source {
+            CellSource::Mesh(_) => self.error(
+                symmetry.span(),
+                &format!("2D group for a mesh cell in `cells.{cell}.symmetry`"),
+                &format!("{shown} is a 2D group, but a triangle mesh bounds a 3D solid"),
+                Some("use `symmetry = \"Oh\"` or `\"Td\"`"),
+            ),
             CellSource::Tpms(_) => self.error(
                 symmetry.span(),
                 &format!("2D group for a TPMS cell in `cells.{cell}.symmetry`"),

@@ -2,7 +2,8 @@
 //! evaluates. Library surfaces and expressions meet here, so `tpms = "schwarz-p"` and
 //! `tpms = "p"` give the same payload and nothing downstream rebuilds between them.
 
-use latticebuild_geom::tpms;
+use latticebuild_geom::field::ScalarField;
+use latticebuild_geom::{expr, tpms};
 
 use crate::cache::KeyBuilder;
 use crate::manifest::{Cell, CellSource};
@@ -25,7 +26,9 @@ impl CellStage {
         match &self.source {
             CellSource::Tpms(name) => key.param("tpms", name.as_str()),
             CellSource::Expr(text) => key.param("expr", text.as_str()),
-            CellSource::Blend { .. } | CellSource::Minkowski { .. } => key.param("combined", true),
+            CellSource::Blend { .. } | CellSource::Minkowski { .. } | CellSource::Mesh(_) => {
+                key.param("combined", true)
+            }
         }
     }
 
@@ -37,10 +40,21 @@ impl CellStage {
                 .formula
                 .to_string(),
             CellSource::Expr(text) => text.clone(),
-            CellSource::Blend { .. } | CellSource::Minkowski { .. } => {
-                return Err("blends and Minkowski combinations have no formula".into());
+            CellSource::Blend { .. } | CellSource::Minkowski { .. } | CellSource::Mesh(_) => {
+                return Err("blends, Minkowski combinations and meshes have no formula".into());
             }
         };
         Ok(formula.into_bytes())
     }
+}
+
+/// The field of a cell payload: a mesh cell's (see [`super::mesh`]) or a formula's.
+pub fn cell_field(payload: &[u8]) -> Result<Box<dyn ScalarField>, String> {
+    if super::mesh::is_mesh_cell(payload) {
+        return super::mesh::mesh_cell_field(payload);
+    }
+    let text = std::str::from_utf8(payload).map_err(|_| "cell formula is not UTF-8".to_string())?;
+    let compiled =
+        expr::compile(text).map_err(|e| format!("cell formula does not compile: {}", e.message))?;
+    Ok(Box::new(compiled))
 }

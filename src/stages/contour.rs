@@ -4,13 +4,14 @@
 use latticebuild_geom::contour::contour;
 use latticebuild_geom::contour2d::{Element2, PlanarRegion, contour_planar, contour_planar_box};
 use latticebuild_geom::element::{Element3, contour_clipped};
-use latticebuild_geom::expr;
 use latticebuild_geom::field::{Grid, ScalarField, Solid, SolidField, SolidSampler};
 use latticebuild_geom::mesh::Mesh;
 use latticebuild_geom::symmetric::{Group, ReferenceElement};
 use latticebuild_geom::validate;
+use latticebuild_geom::within::WithinSampler;
 
 use super::artifact::{MeshArtifact, MeshSummary, Planar};
+use super::mesh::part_sdf;
 use super::symmetric::{FittedPayload, group_of};
 use crate::build::StageProgress;
 use crate::cache::{KeyBuilder, Param};
@@ -31,6 +32,9 @@ pub struct ContourStage {
     pub cell_size: [f64; 3],
     pub solid: Solid,
     pub samples: [usize; 3],
+    /// `within`: the part file's name (its bytes are the second input), and the skin.
+    pub within: Option<String>,
+    pub skin: Option<f64>,
 }
 
 fn vec3(v: [f64; 3]) -> Param {
@@ -48,6 +52,8 @@ impl ContourStage {
             cell_size: output.cell_size,
             solid: output.solid,
             samples: output.samples,
+            within: output.within.as_ref().map(|f| f.given.clone()),
+            skin: output.skin,
         }
     }
 
@@ -71,6 +77,16 @@ impl ContourStage {
                 "samples",
                 Param::List(self.samples.iter().map(|&n| Param::U64(n as u64)).collect()),
             )
+            // The part's content enters as the second input's hash; its extension picks the
+            // reader.
+            .param(
+                "within",
+                self.within
+                    .as_deref()
+                    .and_then(|w| std::path::Path::new(w).extension())
+                    .map_or(String::new(), |e| e.to_string_lossy().to_lowercase()),
+            )
+            .param("skin", self.skin.unwrap_or(0.0))
     }
 
     /// Number of progress steps [`ContourStage::run`] reports.
@@ -79,20 +95,16 @@ impl ContourStage {
     }
 
     /// Contours the cell whose formula is `cell_payload`, then checks the mesh.
+    /// Contours the cell whose payload is `cell_payload` (a formula, a mesh cell or a fitted
+    /// cell), confined to the part whose file bytes are `part` when the output has `within`.
     pub fn run(
         &self,
         cell_payload: &[u8],
+        part: Option<&[u8]>,
         progress: &dyn StageProgress,
     ) -> Result<MeshArtifact, String> {
         let field: Box<dyn ScalarField> = match &self.fitted {
-            None => {
-                let formula = std::str::from_utf8(cell_payload)
-                    .map_err(|_| "cell payload is not UTF-8".to_string())?;
-                Box::new(
-                    expr::compile(formula)
-                        .map_err(|e| format!("cell formula does not compile: {}", e.message))?,
-                )
-            }
+            None => super::cell::cell_field(cell_payload)?,
             Some(spec) => {
                 let group = group_of(spec)?;
                 Box::new(FittedPayload::from_bytes(cell_payload)?.cell(&group)?)
@@ -110,12 +122,28 @@ impl ContourStage {
         } else {
             let model = Grid::spanning(self.domain_min, self.domain_max, self.samples);
             let cell_grid = model.scaled_down(self.cell_size);
-            let sampler = SolidSampler {
+            let lattice = SolidSampler {
                 inner: field.sampler(&cell_grid),
                 solid: self.solid,
             };
-            let mesh =
-                contour(&sampler, &model, &|n| progress.advance(n)).map_err(|e| e.to_string())?;
+            let advance = |n: usize| progress.advance(n);
+            let mesh = match (&self.within, part) {
+                (Some(given), Some(bytes)) => {
+                    progress.phase("preparing the part");
+                    let band = WithinSampler::band_for(&model, self.skin);
+                    let sdf = part_sdf(given, bytes, band)?;
+                    progress.phase("contouring");
+                    let sampler = WithinSampler {
+                        lattice: Box::new(lattice),
+                        part: sdf.sampler(&model),
+                        band,
+                        skin: self.skin,
+                    };
+                    contour(&sampler, &model, &advance)
+                }
+                _ => contour(&lattice, &model, &advance),
+            }
+            .map_err(|e| e.to_string())?;
             (mesh, None)
         };
         progress.phase("checking the mesh");

@@ -9,8 +9,10 @@
 //!
 //! | stage     | parameters in the key                                   | input          | payload |
 //! |-----------|---------------------------------------------------------|----------------|---------|
+//! | `file`    | — (the builder reads the file; its hash is the content's) | —            | the file's bytes (not cached) |
 //! | `cell`    | source kind, TPMS name or expression text               | —              | canonical formula text |
-//! | `contour` | domain, cell size, solid, offset, thickness, samples   | cell payload   | mesh + its check ([`artifact`]) |
+//! | `mesh`    | format, placement, sample                               | file bytes     | placed soup ([`mesh`]), the `cell:` node of a mesh cell |
+//! | `contour` | domain, cell size, solid, offset, thickness, samples, within, skin | cell payload (+ part file) | mesh + its check ([`artifact`]) |
 //! | `sample`  | group, N, mirror, symmetrize                            | cell payload   | `N^d` samples of the sampling domain |
 //! | `fit`     | group, N (or tolerance, mirror, symmetrize for `auto`)  | samples (or cell payload for `auto`) | coefficient table (JSON) |
 //! | `blend`   | group, weights                                          | member coefficient tables | coefficient table |
@@ -21,6 +23,7 @@
 pub mod artifact;
 pub mod cell;
 pub mod contour;
+pub mod mesh;
 pub mod symmetric;
 pub mod write;
 
@@ -33,7 +36,9 @@ pub use write::OutputSink;
 /// One node's computation, with its parameters.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Stage {
+    File(mesh::FileStage),
     Cell(cell::CellStage),
+    MeshCell(mesh::MeshCellStage),
     Sample(symmetric::SampleStage),
     Fit(symmetric::FitStage),
     Combine(symmetric::CombineStage),
@@ -58,7 +63,9 @@ impl Stage {
 
     pub fn kind(&self) -> &'static str {
         match self {
+            Stage::File(_) => "file",
             Stage::Cell(_) => "cell",
+            Stage::MeshCell(_) => "mesh",
             Stage::Sample(_) => "sample",
             Stage::Fit(_) => "fit",
             Stage::Combine(s) => s.kind(),
@@ -72,6 +79,7 @@ impl Stage {
     pub fn version(&self) -> u32 {
         match self {
             Stage::Cell(_) => cell::VERSION,
+            Stage::File(_) | Stage::MeshCell(_) => mesh::VERSION,
             Stage::Sample(_) | Stage::Fit(_) | Stage::Combine(_) | Stage::Constrain(_) => {
                 symmetric::VERSION
             }
@@ -84,7 +92,9 @@ impl Stage {
     pub fn key(&self, inputs: &[ContentHash]) -> Result<(Key, KeyDescription), KeyError> {
         let builder = KeyBuilder::new(self.kind(), self.version());
         let builder = match self {
+            Stage::File(_) => builder,
             Stage::Cell(s) => s.key_params(builder),
+            Stage::MeshCell(s) => s.key_params(builder),
             Stage::Sample(s) => s.key_params(builder),
             Stage::Fit(s) => s.key_params(builder),
             Stage::Combine(s) => s.key_params(builder),
@@ -102,13 +112,15 @@ impl Stage {
     /// The name of input `i`, as it appears in keys and `-v` explanations.
     pub fn input_name(&self, i: usize) -> String {
         match self {
-            Stage::Cell(_) => format!("input {i}"),
+            Stage::File(_) | Stage::Cell(_) => format!("input {i}"),
+            Stage::MeshCell(_) => "mesh file".into(),
             Stage::Sample(_) => "formula".into(),
             Stage::Fit(s) if s.reads_samples() => "samples".into(),
             Stage::Fit(_) => "formula".into(),
             Stage::Combine(_) => format!("cell {}", i + 1),
             Stage::Constrain(_) => "fit".into(),
-            Stage::Contour(_) => "cell".into(),
+            Stage::Contour(_) if i == 0 => "cell".into(),
+            Stage::Contour(_) => "part".into(),
             Stage::Write(_) => "mesh".into(),
         }
     }

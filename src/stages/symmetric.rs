@@ -11,7 +11,6 @@
 
 use serde::{Deserialize, Serialize};
 
-use latticebuild_geom::expr;
 use latticebuild_geom::symmetric::{
     self, Complex64, Extend, FitOptions, FittedCell, Group, SampleOptions, Side, check_surface,
     fit_samples, minkowski_difference, minkowski_sum, weighted_average,
@@ -140,7 +139,7 @@ impl SampleStage {
 
     pub fn run(&self, formula: &[u8]) -> Result<Vec<u8>, String> {
         let group = group_of(&self.spec.group)?;
-        let field = compile_formula(formula)?;
+        let field = super::cell::cell_field(formula)?;
         let samples = symmetric::sample(&group, self.n, &field, sample_options(&self.spec))
             .map_err(|e| e.to_string())?;
         let (min, max) = samples
@@ -163,11 +162,6 @@ impl SampleStage {
         out.extend_from_slice(bytemuck::cast_slice(&samples));
         Ok(out)
     }
-}
-
-fn compile_formula(formula: &[u8]) -> Result<expr::CompiledExpr, String> {
-    let text = std::str::from_utf8(formula).map_err(|_| "cell formula is not UTF-8".to_string())?;
-    expr::compile(text).map_err(|e| format!("cell formula does not compile: {}", e.message))
 }
 
 fn decode_samples(payload: &[u8]) -> Result<(usize, Vec<f64>), String> {
@@ -216,7 +210,7 @@ impl FitStage {
                 cell
             }
             FitResolution::Auto { tolerance } => {
-                let field = compile_formula(input)?;
+                let field = super::cell::cell_field(input)?;
                 let options = FitOptions {
                     sample: sample_options(&self.spec),
                     check_vanishing: true,

@@ -92,6 +92,17 @@ pub trait ScalarField: Sync + Send {
     }
 }
 
+/// A boxed field is the field it holds (its grid sampler included).
+impl<F: ScalarField + ?Sized> ScalarField for Box<F> {
+    fn eval_points(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
+        (**self).eval_points(xs, ys, zs, out);
+    }
+
+    fn sampler<'a>(&'a self, grid: &Grid) -> Box<dyn PlaneSampler + 'a> {
+        (**self).sampler(grid)
+    }
+}
+
 /// Evaluates a field at every grid point, a row of the plane at a time.
 pub struct PointwiseSampler<'a, F: ScalarField + ?Sized> {
     pub field: &'a F,

@@ -20,3 +20,4 @@ pub mod spelling;
 pub mod symmetric;
 pub mod tpms;
 pub mod validate;
+pub mod within;

@@ -1,0 +1,197 @@
+//! The schema of triangle-mesh inputs: cells made from a mesh (`mesh`, `placement`, `sample`)
+//! and outputs filling a part (`within`, `skin`).
+//!
+//! A child of `schema.rs` (it extends its `Checker`). Invariants:
+//! - No IO: file names are resolved against the manifest's directory, and their extension is
+//!   checked against the formats the readers know; whether the file exists is checked by
+//!   [`super::super::check_input_files`] when a manifest is loaded from disk.
+//! - Keys that only make sense with a mesh (`placement`, `sample`, `skin`) are errors without
+//!   one, naming the key that is missing.
+
+use std::collections::BTreeMap;
+
+use latticebuild_geom::spelling;
+
+use super::super::model::{Cell, CellSource, MeshCell, MeshFile, MeshSampling, Output};
+use super::{Checker, Fields, Value, list};
+
+/// File extensions of the mesh readers, lower case.
+pub(super) const MESH_EXTENSIONS: [&str; 4] = ["stl", "obj", "ply", "off"];
+const PLACEMENTS: [&str; 2] = ["reference", "fit"];
+const SAMPLINGS: [&str; 2] = ["sdf", "containment"];
+
+impl Checker<'_, '_, '_> {
+    /// `mesh = "file"`: a cell source; placement and sampling are filled in by
+    /// [`Checker::mesh_options`].
+    pub(super) fn mesh_source(&mut self, cell: &str, value: &Value<'_>) -> Option<CellSource> {
+        let file = self.mesh_file(&format!("cells.{cell}.mesh"), value)?;
+        Some(CellSource::Mesh(MeshCell {
+            file,
+            fit_placement: false,
+            sampling: MeshSampling::SignedDistance,
+        }))
+    }
+
+    /// `placement` and `sample` of a cell: `(fit placement, sampling)` for a mesh cell, and an
+    /// error for each of them given to another cell.
+    pub(super) fn mesh_options(
+        &mut self,
+        cell: &str,
+        fields: &Fields<'_, '_>,
+        is_mesh: bool,
+    ) -> Option<(bool, MeshSampling)> {
+        let path = |k: &str| format!("cells.{cell}.{k}");
+        if !is_mesh {
+            for k in ["placement", "sample"] {
+                if let Some((key, _)) = fields.get(k) {
+                    self.error(
+                        key.span(),
+                        &format!("`{}` applies only to mesh cells", path(k)),
+                        &format!("cell `{cell}` has no `mesh`"),
+                        Some(&format!("remove `{k}`, or give the cell a `mesh = \"part.stl\"`")),
+                    );
+                }
+            }
+            return None;
+        }
+        let placement = match fields.get("placement") {
+            None => Some("reference"),
+            Some((_, v)) => self.choice(&path("placement"), v, &PLACEMENTS, "placement"),
+        };
+        let sampling = match fields.get("sample") {
+            None => Some("sdf"),
+            Some((_, v)) => self.choice(&path("sample"), v, &SAMPLINGS, "way of sampling"),
+        };
+        let sampling = match sampling? {
+            "containment" => MeshSampling::Containment,
+            _ => MeshSampling::SignedDistance,
+        };
+        Some((placement? == "fit", sampling))
+    }
+
+    /// `within` and `skin` of an output; `(None, None)` when anything was reported.
+    #[allow(clippy::type_complexity)]
+    pub(super) fn within(
+        &mut self,
+        output: &str,
+        fields: &Fields<'_, '_>,
+        over_element: bool,
+        planar: bool,
+    ) -> (Option<Option<MeshFile>>, Option<Option<f64>>) {
+        let path = |k: &str| format!("outputs.{output}.{k}");
+        let within = match fields.get("within") {
+            None => Some(None),
+            Some((key, v)) => {
+                let conflict = if over_element {
+                    Some("the output is one cell over its element (`over = \"element\"`)")
+                } else if planar {
+                    Some("the domain is planar, and a part is a 3D solid")
+                } else {
+                    None
+                };
+                match conflict {
+                    Some(why) => {
+                        self.error(
+                            key.span(),
+                            &format!("`{}` does not apply here", path("within")),
+                            why,
+                            Some("fill a 3D box: give `domain` corners as [x, y, z]"),
+                        );
+                        None
+                    }
+                    None => self.mesh_file(&path("within"), v).map(Some),
+                }
+            }
+        };
+        let skin = match fields.get("skin") {
+            None => Some(None),
+            Some((key, v)) => {
+                if fields.contains_key("within") || fields.misspelled("within") {
+                    self.positive_number(&path("skin"), v, "a number")
+                        .map(Some)
+                } else {
+                    self.error(
+                        key.span(),
+                        &format!("`{}` applies only with `within`", path("skin")),
+                        "there is no part to put a skin on",
+                        Some("add `within = \"part.stl\"`, or remove `skin`"),
+                    );
+                    None
+                }
+            }
+        };
+        (within, skin)
+    }
+
+    /// A mesh file name: a non-empty string with a known extension, resolved against the
+    /// manifest's directory.
+    fn mesh_file(&mut self, key: &str, value: &Value<'_>) -> Option<MeshFile> {
+        let given = self.string(key, value)?;
+        let extension = std::path::Path::new(given)
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        if extension
+            .as_deref()
+            .is_none_or(|e| !MESH_EXTENSIONS.contains(&e))
+        {
+            let shown = extension.map_or("no extension".to_string(), |e| format!("`.{e}`"));
+            self.error(
+                value.span(),
+                &format!("`{key}` is not a mesh file the readers know"),
+                &format!("{shown}; expected {}", list(&MESH_EXTENSIONS)),
+                Some("convert the mesh to STL, OBJ, PLY or OFF"),
+            );
+            return None;
+        }
+        Some(MeshFile {
+            given: given.to_string(),
+            path: self.root.join(given),
+            span: value.span(),
+        })
+    }
+
+    /// One of `options`, with a suggestion for a near miss. `what` names the kind of value.
+    fn choice(
+        &mut self,
+        key: &str,
+        value: &Value<'_>,
+        options: &[&'static str],
+        what: &str,
+    ) -> Option<&'static str> {
+        let text = self.string(key, value)?;
+        if let Some(found) = options.iter().find(|o| **o == text) {
+            return Some(found);
+        }
+        let help = match spelling::closest(text, options.iter().copied()) {
+            Some(close) => format!("did you mean `{close}`?"),
+            None => format!("expected one of {}", list(options)),
+        };
+        self.error(
+            value.span(),
+            &format!("unknown {what} `{text}` in `{key}`"),
+            &format!("expected one of {}", list(options)),
+            Some(&help),
+        );
+        None
+    }
+}
+
+/// Every mesh file the manifest reads, once each, in name order (for `watch` and the load-time
+/// existence check).
+pub(super) fn input_files(
+    cells: &BTreeMap<String, Cell>,
+    outputs: &BTreeMap<String, Output>,
+) -> Vec<std::path::PathBuf> {
+    let mut files: Vec<std::path::PathBuf> = cells
+        .values()
+        .filter_map(|c| match &c.source {
+            CellSource::Mesh(m) => Some(m.file.path.clone()),
+            _ => None,
+        })
+        .chain(outputs.values().filter_map(|o| o.within.as_ref().map(|f| f.path.clone())))
+        .collect();
+    files.sort();
+    files.dedup();
+    files
+}
