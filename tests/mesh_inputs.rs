@@ -10,13 +10,24 @@ use std::f64::consts::PI;
 /// A UV sphere of `radius` around `centre`: `(ASCII STL, enclosed volume)`, triangles
 /// counter-clockwise seen from outside.
 fn sphere_stl(radius: f64, centre: [f64; 3], rings: usize, segments: usize) -> (String, f64) {
+    // Poles and the seam are exact, so the surface is closed (shared corners are equal).
     let point = |i: usize, j: usize| -> [f64; 3] {
         let theta = PI * i as f64 / rings as f64;
-        let phi = 2.0 * PI * j as f64 / segments as f64;
+        let phi = 2.0 * PI * (j % segments) as f64 / segments as f64;
+        let ring = if i == 0 || i == rings {
+            0.0
+        } else {
+            radius * theta.sin()
+        };
+        let z = match i {
+            0 => radius,
+            _ if i == rings => -radius,
+            _ => radius * theta.cos(),
+        };
         [
-            centre[0] + radius * theta.sin() * phi.cos(),
-            centre[1] + radius * theta.sin() * phi.sin(),
-            centre[2] + radius * theta.cos(),
+            centre[0] + ring * phi.cos(),
+            centre[1] + ring * phi.sin(),
+            centre[2] + z,
         ]
     };
     let mut triangles = Vec::new();
@@ -38,7 +49,8 @@ fn sphere_stl(radius: f64, centre: [f64; 3], rings: usize, segments: usize) -> (
     for [p, q, r] in &triangles {
         let rel = |v: &[f64; 3]| [v[0] - centre[0], v[1] - centre[1], v[2] - centre[2]];
         let (p0, q0, r0) = (rel(p), rel(q), rel(r));
-        volume += (p0[0] * (q0[1] * r0[2] - q0[2] * r0[1]) - p0[1] * (q0[0] * r0[2] - q0[2] * r0[0])
+        volume += (p0[0] * (q0[1] * r0[2] - q0[2] * r0[1])
+            - p0[1] * (q0[0] * r0[2] - q0[2] * r0[0])
             + p0[2] * (q0[0] * r0[1] - q0[1] * r0[0]))
             / 6.0;
         text.push_str(" facet normal 0 0 0\n  outer loop\n");
@@ -52,7 +64,9 @@ fn sphere_stl(radius: f64, centre: [f64; 3], rings: usize, segments: usize) -> (
 }
 
 fn number(report: &serde_json::Value, key: &str) -> f64 {
-    report[key].as_f64().unwrap_or_else(|| panic!("{key} in {report}"))
+    report[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{key} in {report}"))
 }
 
 #[test]
@@ -174,7 +188,10 @@ samples = 61
     let balls = by_name("balls");
     assert_eq!(balls["watertight"], true);
     let fraction = number(&balls, "volume_fraction");
-    assert!((fraction - ball_volume).abs() < 0.004, "{fraction} vs {ball_volume}");
+    assert!(
+        (fraction - ball_volume).abs() < 0.004,
+        "{fraction} vs {ball_volume}"
+    );
     let fitted = by_name("fitted");
     assert_eq!(fitted["watertight"], true);
     let fitted_fraction = number(&fitted, "volume_fraction");
@@ -224,7 +241,10 @@ fn bad_mesh_files_are_errors_naming_the_file() {
     let out = p.run(&["build", "lattice.toml"]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("cannot read the mesh `missing.stl` of `cells.ball.mesh`"), "{err}");
+    assert!(
+        err.contains("cannot read the mesh `missing.stl` of `cells.ball.mesh`"),
+        "{err}"
+    );
     assert!(err.contains("lattice.toml:2:8"), "{err}");
 
     // Half-written: the ASCII STL stops inside a facet.

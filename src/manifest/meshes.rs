@@ -48,7 +48,9 @@ impl Checker<'_, '_, '_> {
                         key.span(),
                         &format!("`{}` applies only to mesh cells", path(k)),
                         &format!("cell `{cell}` has no `mesh`"),
-                        Some(&format!("remove `{k}`, or give the cell a `mesh = \"part.stl\"`")),
+                        Some(&format!(
+                            "remove `{k}`, or give the cell a `mesh = \"part.stl\"`"
+                        )),
                     );
                 }
             }
@@ -83,19 +85,25 @@ impl Checker<'_, '_, '_> {
             None => Some(None),
             Some((key, v)) => {
                 let conflict = if over_element {
-                    Some("the output is one cell over its element (`over = \"element\"`)")
+                    Some((
+                        "the output is one cell over its element (`over = \"element\"`)",
+                        "remove `over`, and give the `domain` to fill",
+                    ))
                 } else if planar {
-                    Some("the domain is planar, and a part is a 3D solid")
+                    Some((
+                        "the domain is planar, and a part is a 3D solid",
+                        "give the `domain` corners as [x, y, z]",
+                    ))
                 } else {
                     None
                 };
                 match conflict {
-                    Some(why) => {
+                    Some((why, help)) => {
                         self.error(
                             key.span(),
                             &format!("`{}` does not apply here", path("within")),
                             why,
-                            Some("fill a 3D box: give `domain` corners as [x, y, z]"),
+                            Some(help),
                         );
                         None
                     }
@@ -107,8 +115,7 @@ impl Checker<'_, '_, '_> {
             None => Some(None),
             Some((key, v)) => {
                 if fields.contains_key("within") || fields.misspelled("within") {
-                    self.positive_number(&path("skin"), v, "a number")
-                        .map(Some)
+                    self.positive_number(&path("skin"), v, "a number").map(Some)
                 } else {
                     self.error(
                         key.span(),
@@ -189,7 +196,11 @@ pub(super) fn input_files(
             CellSource::Mesh(m) => Some(m.file.path.clone()),
             _ => None,
         })
-        .chain(outputs.values().filter_map(|o| o.within.as_ref().map(|f| f.path.clone())))
+        .chain(
+            outputs
+                .values()
+                .filter_map(|o| o.within.as_ref().map(|f| f.path.clone())),
+        )
         .collect();
     files.sort();
     files.dedup();

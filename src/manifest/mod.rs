@@ -33,7 +33,6 @@ pub use model::*;
 
 use source::{Report, Sources};
 
-
 /// Reads and validates the manifest at `path`, with `--set` overrides applied.
 pub fn load(path: &Path, overrides: &[String]) -> Result<Manifest, Vec<Diagnostic>> {
     match std::fs::read_to_string(path) {

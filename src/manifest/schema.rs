@@ -26,10 +26,10 @@ use super::model::{Cell, Manifest, Name, Output};
 use super::source::Report;
 use crate::diagnostics::Diagnostic;
 
-#[path = "symmetry.rs"]
-mod symmetry;
 #[path = "meshes.rs"]
 mod meshes;
+#[path = "symmetry.rs"]
+mod symmetry;
 
 type Key<'i> = Spanned<DeString<'i>>;
 type Value<'i> = Spanned<DeValue<'i>>;
@@ -85,7 +85,11 @@ pub(crate) fn expects_string(path: &[&str]) -> bool {
     matches!(
         path,
         ["build", "out_dir"]
-            | ["cells", _, "tpms" | "expr" | "extend" | "mesh" | "placement" | "sample"]
+            | [
+                "cells",
+                _,
+                "tpms" | "expr" | "extend" | "mesh" | "placement" | "sample"
+            ]
             | ["outputs", _, "cell" | "over" | "solid" | "path" | "within"]
     )
 }

@@ -286,7 +286,8 @@ impl Checker<'_, '_, '_> {
             return None;
         }
         let (mut source, _) = source?;
-        if let (CellSource::Mesh(mesh), Some((fit_placement, sampling))) = (&mut source, mesh_options)
+        if let (CellSource::Mesh(mesh), Some((fit_placement, sampling))) =
+            (&mut source, mesh_options)
         {
             mesh.fit_placement = fit_placement;
             mesh.sampling = sampling;

@@ -201,7 +201,7 @@ error: cell `a` has no source
  --> lattice.toml:1:1
   |
 1 | [cells.a]
-  | ^^^^^^^^^ expected `tpms`, `expr`, `blend` or `minkowski`
+  | ^^^^^^^^^ expected `tpms`, `expr`, `mesh`, `blend` or `minkowski`
   |
   = help: add `tpms = \"gyroid\"` for a library surface or `expr = \"...\"` for a formula in x, y, z
 
@@ -835,7 +835,7 @@ error: cell `c` has no source
  --> --set:1:7
   |
 1 | cells.c.shape=1
-  |       ^ expected `tpms`, `expr`, `blend` or `minkowski`
+  |       ^ expected `tpms`, `expr`, `mesh`, `blend` or `minkowski`
   |
   = help: add `tpms = \"gyroid\"` for a library surface or `expr = \"...\"` for a formula in x, y, z
 
@@ -845,7 +845,7 @@ error: unknown key `shape` in cell `c`
 1 | cells.c.shape=1
   |         ^^^^^ unknown key
   |
-  = help: expected one of `tpms`, `expr`, `blend`, `minkowski`, `symmetry`, `fit`, `extend`, `symmetrize`, `normal_to_faces`, `offset`, `invert`
+  = help: expected one of `tpms`, `expr`, `blend`, `minkowski`, `mesh`, `placement`, `sample`, `symmetry`, `fit`, `extend`, `symmetrize`, `normal_to_faces`, `offset`, `invert`
 
 error: could not load `lattice.toml` due to 3 previous errors
 ",
@@ -907,6 +907,8 @@ fn output(name: &str, span: Option<std::ops::Range<usize>>) -> Output {
         formats: vec![Format::Stl],
         encoding: Encoding::Binary,
         stem: name.into(),
+        within: None,
+        skin: None,
     }
 }
 
@@ -1271,5 +1273,7 @@ fn reference_example_is_valid() {
     assert_eq!(manifest.outputs["block"].stem, "block");
 }
 
+#[path = "mesh_tests.rs"]
+mod mesh_tests;
 #[path = "symmetry_tests.rs"]
 mod symmetry_tests;

@@ -57,7 +57,14 @@ impl MeshCellStage {
             .map(|f| f.extension())
             .unwrap_or("");
         key.param("format", format)
-            .param("placement", if self.cell.fit_placement { "fit" } else { "reference" })
+            .param(
+                "placement",
+                if self.cell.fit_placement {
+                    "fit"
+                } else {
+                    "reference"
+                },
+            )
             .param(
                 "sample",
                 match self.cell.sampling {
@@ -93,9 +100,8 @@ fn place_in_unit_cell(soup: &mut TriangleSoup) {
 }
 
 fn encode(soup: &TriangleSoup, sampling: MeshSampling) -> Vec<u8> {
-    let mut out = Vec::with_capacity(
-        8 + 1 + 16 + soup.positions.len() * 24 + soup.triangles.len() * 12,
-    );
+    let mut out =
+        Vec::with_capacity(8 + 1 + 16 + soup.positions.len() * 24 + soup.triangles.len() * 12);
     out.extend_from_slice(MESH_CELL_MAGIC);
     out.push(match sampling {
         MeshSampling::SignedDistance => 0,
@@ -128,7 +134,10 @@ fn decode(payload: &[u8]) -> Result<(TriangleSoup, MeshSampling), String> {
     let count = |b: &[u8]| -> Result<usize, String> {
         Ok(u64::from_le_bytes(b.try_into().map_err(|_| bad())?) as usize)
     };
-    let (np, nt) = (count(rest.get(..8).ok_or_else(bad)?)?, count(rest.get(8..16).ok_or_else(bad)?)?);
+    let (np, nt) = (
+        count(rest.get(..8).ok_or_else(bad)?)?,
+        count(rest.get(8..16).ok_or_else(bad)?)?,
+    );
     let body = &rest[16..];
     if body.len() != np * 24 + nt * 12 {
         return Err(bad());
@@ -148,10 +157,13 @@ fn decode(payload: &[u8]) -> Result<(TriangleSoup, MeshSampling), String> {
         0 => MeshSampling::SignedDistance,
         _ => MeshSampling::Containment,
     };
-    Ok((TriangleSoup {
-        positions,
-        triangles,
-    }, sampling))
+    Ok((
+        TriangleSoup {
+            positions,
+            triangles,
+        },
+        sampling,
+    ))
 }
 
 /// The field of a mesh cell's payload, repeated with period 1 (the cell is the unit cube
