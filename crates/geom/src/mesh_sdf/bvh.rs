@@ -17,7 +17,7 @@
 //! whatever the thread count.
 
 use super::prepare::Tri;
-use super::vec3::{V3, max, min};
+use super::vec3::{V3, add, box_dist2, cross, dot, max, min, norm, scale, sub};
 use rayon::prelude::*;
 
 /// Most triangles in a leaf.
@@ -28,7 +28,7 @@ const MEDIAN_DEPTH: usize = 48;
 /// Deepest possible node (root at 0): median splits halve, and counts fit in 32 bits.
 pub(super) const MAX_DEPTH: usize = MEDIAN_DEPTH + 33;
 
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 pub(super) struct Node {
     pub lo: V3,
     pub hi: V3,
@@ -36,12 +36,43 @@ pub(super) struct Node {
     pub first: u32,
     /// Leaf: its number of triangles (at least 1); interior: 0.
     pub count: u32,
+    /// An oriented box around the triangles: `extent[a][0] ≤ frame[a]·x ≤ extent[a][1]`, the
+    /// frame orthonormal with `frame[2]` along the mean normal (infinite extents when unknown).
+    pub frame: [V3; 3],
+    pub extent: [[f64; 2]; 3],
+}
+
+impl Default for Node {
+    fn default() -> Node {
+        Node {
+            lo: [0.0; 3],
+            hi: [0.0; 3],
+            first: 0,
+            count: 0,
+            frame: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            extent: [[f64::NEG_INFINITY, f64::INFINITY]; 3],
+        }
+    }
 }
 
 impl Node {
     #[inline]
     pub(super) fn is_leaf(&self) -> bool {
         self.count > 0
+    }
+
+    /// A lower bound on the squared distance from `p` to the node's triangles: they lie in
+    /// both its boxes.
+    #[inline]
+    pub(super) fn dist2(&self, p: V3) -> f64 {
+        let aligned = box_dist2(p, self.lo, self.hi);
+        let mut oriented = 0.0;
+        for (axis, [lo, hi]) in self.frame.iter().zip(self.extent) {
+            let s = dot(*axis, p);
+            let d = (lo - s).max(s - hi).max(0.0);
+            oriented += d * d;
+        }
+        aligned.max(oriented)
     }
 }
 
@@ -101,6 +132,7 @@ pub(super) fn build(triangles: Vec<Tri>) -> Bvh {
         .map(|it| triangles[it.id as usize])
         .collect();
     fit_bounds(&mut nodes, &ordered);
+    fit_oriented(&mut nodes, &ordered);
     Bvh {
         nodes,
         triangles: ordered,
@@ -261,6 +293,72 @@ fn fit_bounds(nodes: &mut [Node], triangles: &[Tri]) {
         nodes[i].lo = lo;
         nodes[i].hi = hi;
     }
+}
+
+/// Nodes above this many triangles get no oriented box: a large patch is too curved for one
+/// to be much tighter than the aligned box, and skipping them keeps the cost near
+/// `O(n log OBB_MAX)`.
+const OBB_MAX: u32 = 1 << 12;
+
+/// Oriented boxes along each node's mean normal, tight around its triangles.
+///
+/// Why: far from a finely tessellated smooth surface, the aligned boxes of many leaves come
+/// within the nearest distance plus a box width, and a nearest-triangle search must open them
+/// all: a cap of the surface whose area grows with the distance times the box size. A patch's
+/// oriented box is a thin plate hugging it (thickness: patch size squared over curvature
+/// radius), so its distance bound is nearly the patch's own, and only true near ties are
+/// opened.
+fn fit_oriented(nodes: &mut [Node], triangles: &[Tri]) {
+    let mut range = vec![(0u32, 0u32); nodes.len()];
+    let mut area = vec![[0.0; 3]; nodes.len()];
+    for i in (0..nodes.len()).rev() {
+        let node = nodes[i];
+        if node.is_leaf() {
+            range[i] = (node.first, node.first + node.count);
+            area[i] = triangles[node.first as usize..(node.first + node.count) as usize]
+                .iter()
+                .fold([0.0; 3], |a, t| {
+                    add(a, cross(sub(t[1], t[0]), sub(t[2], t[0])))
+                });
+        } else {
+            let (l, r) = (i + 1, node.first as usize);
+            range[i] = (range[l].0, range[r].1);
+            area[i] = add(area[l], area[r]);
+        }
+    }
+    nodes.par_iter_mut().enumerate().for_each(|(i, node)| {
+        let (start, end) = range[i];
+        let len = norm(area[i]);
+        if end - start > OBB_MAX || !(len > 0.0 && len.is_finite()) {
+            return;
+        }
+        let n = scale(area[i], 1.0 / len);
+        // Any unit vector across n: cross with the axis n is least along.
+        let axis = (0..3)
+            .min_by(|&a, &b| n[a].abs().total_cmp(&n[b].abs()))
+            .unwrap_or(0);
+        let mut e = [0.0; 3];
+        e[axis] = 1.0;
+        let u = cross(n, e);
+        let u = scale(u, 1.0 / norm(u));
+        let frame = [u, cross(n, u), n];
+        let mut extent = [[f64::INFINITY, f64::NEG_INFINITY]; 3];
+        for v in triangles[start as usize..end as usize].iter().flatten() {
+            for (axis, [lo, hi]) in frame.iter().zip(&mut extent) {
+                let s = dot(*axis, *v);
+                *lo = lo.min(s);
+                *hi = hi.max(s);
+            }
+        }
+        // Rounding in the projections must not lift the bound above a true distance.
+        for [lo, hi] in &mut extent {
+            let pad = 1e-12 * (lo.abs().max(hi.abs()) + (*hi - *lo));
+            *lo -= pad;
+            *hi += pad;
+        }
+        node.frame = frame;
+        node.extent = extent;
+    });
 }
 
 #[cfg(test)]

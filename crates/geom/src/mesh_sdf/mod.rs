@@ -54,6 +54,7 @@ mod winding;
 use crate::field::{Grid, PlaneSampler, ScalarField};
 use crate::mesh_read::TriangleSoup;
 use rayon::prelude::*;
+use std::time::{Duration, Instant};
 use thiserror::Error;
 
 pub use prepare::SurfaceReport;
@@ -124,6 +125,19 @@ pub struct MeshSdf {
     bounds: ([f64; 3], [f64; 3]),
     /// Lengths below this are rounding noise at the mesh's scale.
     tolerance: f64,
+    timings: BuildTimings,
+}
+
+/// Wall time of the construction phases of a [`MeshSdf`], for benchmarks. Not part of any
+/// result.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BuildTimings {
+    /// Welding, clean-up, orientation and closedness (`prepare.rs`).
+    pub prepare: Duration,
+    /// The hierarchy with its aligned and oriented boxes.
+    pub bvh: Duration,
+    /// The winding-number moments.
+    pub moments: Duration,
 }
 
 impl MeshSdf {
@@ -131,12 +145,20 @@ impl MeshSdf {
     pub fn new(soup: &TriangleSoup, options: SdfOptions) -> Result<MeshSdf, MeshSdfError> {
         check_options(&options)?;
         check_soup(soup)?;
+        let start = Instant::now();
         let surface = prepare::prepare(soup, options.repair);
         if surface.triangles.is_empty() {
             return Err(MeshSdfError::Degenerate);
         }
+        let prepared = Instant::now();
         let bvh = bvh::build(surface.triangles);
+        let built = Instant::now();
         let moments = winding::moments(&bvh, options.beta);
+        let timings = BuildTimings {
+            prepare: prepared - start,
+            bvh: built - prepared,
+            moments: built.elapsed(),
+        };
         let root = bvh.nodes[0];
         let scale = (0..3)
             .map(|a| {
@@ -153,11 +175,16 @@ impl MeshSdf {
             moments,
             options,
             report: surface.report,
+            timings,
         })
     }
 
     pub fn options(&self) -> &SdfOptions {
         &self.options
+    }
+
+    pub fn timings(&self) -> BuildTimings {
+        self.timings
     }
 
     /// What preparation found and changed.
@@ -188,7 +215,7 @@ impl MeshSdf {
     /// Distance from `p` to the nearest triangle, clamped to the band if there is one.
     pub fn unsigned_distance(&self, p: [f64; 3]) -> f64 {
         let band = self.options.band.unwrap_or(f64::INFINITY);
-        let (d2, tri) = nearest::nearest(&self.bvh, p, None, band * band);
+        let (d2, tri) = nearest::nearest(&self.bvh, p, None, band * band, &mut Vec::new());
         if tri.is_some() { d2.sqrt() } else { band }
     }
 

