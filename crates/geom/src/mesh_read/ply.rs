@@ -256,10 +256,11 @@ impl Body<'_> {
                             at: Location::Line(line),
                             expected: what(),
                         })?;
-                let value = if ty.is_integer() {
-                    text::int(token).map(|v| v as f64)
-                } else {
-                    text::float(token)
+                let value = match ty {
+                    // A declared `float` holds what a binary file would: the nearest f32.
+                    Scalar::F32 => text::float(token).map(|v| f64::from(v as f32)),
+                    Scalar::F64 => text::float(token),
+                    _ => text::int(token).map(|v| v as f64),
                 };
                 value.ok_or_else(|| {
                     unexpected(Location::Line(line), format!("{} ({ty:?})", what()), token)

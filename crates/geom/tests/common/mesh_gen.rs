@@ -257,7 +257,7 @@ pub fn box_sd(p: [f64; 3], h: f64) -> f64 {
 }
 
 /// Reverses the winding of the triangles `which` picks.
-pub fn flip_some(soup: &mut TriangleSoup, which: impl Fn(usize) -> bool) -> usize {
+pub fn flip_some(soup: &mut TriangleSoup, mut which: impl FnMut(usize) -> bool) -> usize {
     let mut n = 0;
     for (k, t) in soup.triangles.iter_mut().enumerate() {
         if which(k) {
