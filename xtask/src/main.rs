@@ -1,8 +1,11 @@
 //! Chores: `cargo xtask golden [--bless]`, `cargo xtask bench [--sizes 200,400,800]
-//! [--no-peers] [--field separable|dense]`, `cargo xtask codegen [--check]`.
+//! [--no-peers] [--field separable|dense]`, `cargo xtask bench-mesh [triangles] [samples]`,
+//! `cargo xtask codegen [--check]`.
 //!
 //! Invariant: every generated file has a test that fails when it is stale
 //! (`tests/codegen.rs`), so generated text cannot drift from its source.
+
+mod bench_mesh;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
@@ -12,10 +15,11 @@ fn main() -> ExitCode {
     let result = match args.first().map(String::as_str) {
         Some("golden") => golden(args.iter().any(|a| a == "--bless")),
         Some("bench") => bench(&args[1..]),
+        Some("bench-mesh") => bench_mesh::run(&args[1..]),
         Some("codegen") => codegen(args.iter().any(|a| a == "--check")),
         _ => Err(
             "usage: cargo xtask golden [--bless] | bench [--sizes 200,400,800] [--no-peers] \
-                  [--field separable|dense] | codegen [--check]"
+                  [--field separable|dense] | bench-mesh [triangles] [samples] | codegen [--check]"
                 .to_string(),
         ),
     };

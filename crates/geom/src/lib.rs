@@ -16,6 +16,8 @@ pub mod expr;
 pub mod field;
 pub mod mesh;
 pub mod mesh_io;
+pub mod mesh_read;
+pub mod mesh_sdf;
 pub mod spelling;
 pub mod symmetric;
 pub mod tpms;

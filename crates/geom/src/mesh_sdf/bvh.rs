@@ -1,0 +1,418 @@
+//! A binary bounding-volume hierarchy over triangles, built by binned SAH.
+//!
+//! Layout: nodes in depth-first preorder, so a node's first child is the next node and its
+//! second child is at `first`; leaves hold `count` (1 to [`LEAF`]) consecutive triangles of
+//! [`Bvh::triangles`] from `first`. Children always come after their parent, so one backward
+//! sweep computes anything bottom-up (bounds here, multipole moments in `winding.rs`).
+//!
+//! Splits: 16 bins along the longest axis of the triangle centroids' bounds, minimising the
+//! surface-area cost. Split decisions use `f32` copies of the triangles normalised to the
+//! soup's bounding box (half the memory traffic of `f64`; a split only needs to be good, not
+//! exact), while node bounds are computed from the `f64` triangles afterwards, so they are
+//! exact. Below depth [`MEDIAN_DEPTH`] a split falls back to the median, which bounds the depth
+//! by `MEDIAN_DEPTH + log2 n` ([`MAX_DEPTH`]), so traversal stacks can be fixed arrays.
+//!
+//! Subtrees above [`PARALLEL`] triangles are built on rayon in parallel, each into its own
+//! node list, and the lists are stitched in preorder once at the end. The result is the same
+//! whatever the thread count.
+
+use super::prepare::Tri;
+use super::vec3::{V3, add, box_dist2, cross, dot, max, min, norm, scale, sub};
+use rayon::prelude::*;
+
+/// Most triangles in a leaf.
+pub(super) const LEAF: usize = 4;
+const BINS: usize = 16;
+const PARALLEL: usize = 1 << 13;
+const MEDIAN_DEPTH: usize = 48;
+/// Deepest possible node (root at 0): median splits halve, and counts fit in 32 bits.
+pub(super) const MAX_DEPTH: usize = MEDIAN_DEPTH + 33;
+
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Node {
+    pub lo: V3,
+    pub hi: V3,
+    /// Leaf: its first triangle; interior: its second child.
+    pub first: u32,
+    /// Leaf: its number of triangles (at least 1); interior: 0.
+    pub count: u32,
+    /// An oriented box around the triangles: `extent[a][0] ≤ frame[a]·x ≤ extent[a][1]`, the
+    /// frame orthonormal with `frame[2]` along the mean normal (infinite extents when unknown).
+    pub frame: [V3; 3],
+    pub extent: [[f64; 2]; 3],
+}
+
+impl Default for Node {
+    fn default() -> Node {
+        Node {
+            lo: [0.0; 3],
+            hi: [0.0; 3],
+            first: 0,
+            count: 0,
+            frame: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            extent: [[f64::NEG_INFINITY, f64::INFINITY]; 3],
+        }
+    }
+}
+
+impl Node {
+    #[inline]
+    pub(super) fn is_leaf(&self) -> bool {
+        self.count > 0
+    }
+
+    /// A lower bound on the squared distance from `p` to the node's triangles: they lie in
+    /// both its boxes.
+    #[inline]
+    pub(super) fn dist2(&self, p: V3) -> f64 {
+        let aligned = box_dist2(p, self.lo, self.hi);
+        let mut oriented = 0.0;
+        for (axis, [lo, hi]) in self.frame.iter().zip(self.extent) {
+            let s = dot(*axis, p);
+            let d = (lo - s).max(s - hi).max(0.0);
+            oriented += d * d;
+        }
+        aligned.max(oriented)
+    }
+}
+
+pub(super) struct Bvh {
+    pub nodes: Vec<Node>,
+    /// The triangles in leaf order.
+    pub triangles: Vec<Tri>,
+}
+
+#[derive(Clone, Copy)]
+struct Item {
+    centroid: [f32; 3],
+    lo: [f32; 3],
+    hi: [f32; 3],
+    id: u32,
+}
+
+enum Built {
+    /// A subtree built serially: preorder nodes whose interior `first` counts from the start
+    /// of this list, leaf `first` from the start of the whole triangle list.
+    Nodes(Vec<Node>),
+    Split(Box<Built>, Box<Built>),
+}
+
+/// Builds the hierarchy over `triangles` (at least one).
+pub(super) fn build(triangles: Vec<Tri>) -> Bvh {
+    let (lo, hi) = triangles
+        .par_iter()
+        .map(|t| (min(min(t[0], t[1]), t[2]), max(max(t[0], t[1]), t[2])))
+        .reduce(
+            || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
+            |a, b| (min(a.0, b.0), max(a.1, b.1)),
+        );
+    let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f64::max);
+    let inv = if extent > 0.0 { 1.0 / extent } else { 1.0 };
+    let normal = |p: V3| -> [f32; 3] { std::array::from_fn(|a| ((p[a] - lo[a]) * inv) as f32) };
+    let mut items: Vec<Item> = triangles
+        .par_iter()
+        .enumerate()
+        .map(|(id, t)| {
+            let [a, b, c] = t.map(normal);
+            let lo = std::array::from_fn(|k| a[k].min(b[k]).min(c[k]));
+            let hi = std::array::from_fn(|k| a[k].max(b[k]).max(c[k]));
+            Item {
+                centroid: std::array::from_fn(|k| (a[k] + b[k] + c[k]) / 3.0),
+                lo,
+                hi,
+                id: id as u32,
+            }
+        })
+        .collect();
+    let built = subtree(&mut items, 0, 0);
+    let mut nodes = Vec::with_capacity(items.len());
+    flatten(built, &mut nodes);
+    let ordered: Vec<Tri> = items
+        .par_iter()
+        .map(|it| triangles[it.id as usize])
+        .collect();
+    fit_bounds(&mut nodes, &ordered);
+    fit_oriented(&mut nodes, &ordered);
+    Bvh {
+        nodes,
+        triangles: ordered,
+    }
+}
+
+fn subtree(items: &mut [Item], offset: usize, depth: usize) -> Built {
+    if items.len() <= PARALLEL {
+        let mut nodes = Vec::with_capacity(items.len());
+        serial(items, offset, depth, &mut nodes);
+        return Built::Nodes(nodes);
+    }
+    let mid = split(items, depth);
+    let (left, right) = items.split_at_mut(mid);
+    let (l, r) = rayon::join(
+        || subtree(left, offset, depth + 1),
+        || subtree(right, offset + mid, depth + 1),
+    );
+    Built::Split(Box::new(l), Box::new(r))
+}
+
+fn serial(items: &mut [Item], offset: usize, depth: usize, nodes: &mut Vec<Node>) {
+    let me = nodes.len();
+    if items.len() <= LEAF {
+        nodes.push(Node {
+            first: offset as u32,
+            count: items.len() as u32,
+            ..Node::default()
+        });
+        return;
+    }
+    nodes.push(Node::default());
+    let mid = split(items, depth);
+    let (left, right) = items.split_at_mut(mid);
+    serial(left, offset, depth + 1, nodes);
+    nodes[me].first = nodes.len() as u32;
+    serial(right, offset + mid, depth + 1, nodes);
+}
+
+fn flatten(built: Built, nodes: &mut Vec<Node>) {
+    match built {
+        Built::Nodes(list) => {
+            let base = nodes.len() as u32;
+            nodes.extend(list.into_iter().map(|mut n| {
+                if !n.is_leaf() {
+                    n.first += base;
+                }
+                n
+            }));
+        }
+        Built::Split(l, r) => {
+            let me = nodes.len();
+            nodes.push(Node::default());
+            flatten(*l, nodes);
+            nodes[me].first = nodes.len() as u32;
+            flatten(*r, nodes);
+        }
+    }
+}
+
+fn area(lo: [f32; 3], hi: [f32; 3]) -> f32 {
+    let d: [f32; 3] = std::array::from_fn(|a| (hi[a] - lo[a]).max(0.0));
+    d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
+}
+
+/// Partitions `items` (more than one) into two non-empty parts and returns the size of the
+/// first.
+fn split(items: &mut [Item], depth: usize) -> usize {
+    let n = items.len();
+    let (clo, chi) = items.iter().fold(
+        ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]),
+        |(lo, hi), it| {
+            (
+                std::array::from_fn(|a| lo[a].min(it.centroid[a])),
+                std::array::from_fn(|a| hi[a].max(it.centroid[a])),
+            )
+        },
+    );
+    let axis = (0..3)
+        .max_by(|&a, &b| (chi[a] - clo[a]).total_cmp(&(chi[b] - clo[b])))
+        .unwrap_or(0);
+    let extent = chi[axis] - clo[axis];
+    let median = |items: &mut [Item]| {
+        items.select_nth_unstable_by(n / 2, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+        n / 2
+    };
+    if depth >= MEDIAN_DEPTH || extent.is_nan() || extent <= 0.0 {
+        return median(items);
+    }
+    let to_bin = BINS as f32 / extent;
+    let bin = |it: &Item| (((it.centroid[axis] - clo[axis]) * to_bin) as usize).min(BINS - 1);
+    let mut counts = [0usize; BINS];
+    let mut bounds = [([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]); BINS];
+    for it in items.iter() {
+        let b = bin(it);
+        counts[b] += 1;
+        let (lo, hi) = &mut bounds[b];
+        for a in 0..3 {
+            lo[a] = lo[a].min(it.lo[a]);
+            hi[a] = hi[a].max(it.hi[a]);
+        }
+    }
+    // Cost of splitting after bin i: area·count on each side.
+    let mut right_cost = [0.0f32; BINS];
+    let (mut lo, mut hi, mut count) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3], 0);
+    for i in (1..BINS).rev() {
+        lo = std::array::from_fn(|a| lo[a].min(bounds[i].0[a]));
+        hi = std::array::from_fn(|a| hi[a].max(bounds[i].1[a]));
+        count += counts[i];
+        right_cost[i] = area(lo, hi) * count as f32;
+    }
+    let (mut lo, mut hi, mut count) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3], 0);
+    let mut best = (f32::INFINITY, usize::MAX);
+    for i in 0..BINS - 1 {
+        lo = std::array::from_fn(|a| lo[a].min(bounds[i].0[a]));
+        hi = std::array::from_fn(|a| hi[a].max(bounds[i].1[a]));
+        count += counts[i];
+        if count == 0 || count == n {
+            continue;
+        }
+        let cost = area(lo, hi) * count as f32 + right_cost[i + 1];
+        if cost < best.0 {
+            best = (cost, i);
+        }
+    }
+    if best.1 == usize::MAX {
+        return median(items);
+    }
+    let mut mid = 0;
+    for k in 0..n {
+        if bin(&items[k]) <= best.1 {
+            items.swap(k, mid);
+            mid += 1;
+        }
+    }
+    mid
+}
+
+/// Exact `f64` bounds, children before parents.
+fn fit_bounds(nodes: &mut [Node], triangles: &[Tri]) {
+    for i in (0..nodes.len()).rev() {
+        let node = nodes[i];
+        let (lo, hi) = if node.is_leaf() {
+            let tris = &triangles[node.first as usize..(node.first + node.count) as usize];
+            tris.iter().fold(
+                ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
+                |(lo, hi), t| {
+                    (
+                        min(min(min(lo, t[0]), t[1]), t[2]),
+                        max(max(max(hi, t[0]), t[1]), t[2]),
+                    )
+                },
+            )
+        } else {
+            let (l, r) = (nodes[i + 1], nodes[node.first as usize]);
+            (min(l.lo, r.lo), max(l.hi, r.hi))
+        };
+        nodes[i].lo = lo;
+        nodes[i].hi = hi;
+    }
+}
+
+/// Nodes above this many triangles get no oriented box: a large patch is too curved for one
+/// to be much tighter than the aligned box, and skipping them keeps the cost near
+/// `O(n log OBB_MAX)`.
+const OBB_MAX: u32 = 1 << 12;
+
+/// Oriented boxes along each node's mean normal, tight around its triangles.
+///
+/// Why: far from a finely tessellated smooth surface, the aligned boxes of many leaves come
+/// within the nearest distance plus a box width, and a nearest-triangle search must open them
+/// all: a cap of the surface whose area grows with the distance times the box size. A patch's
+/// oriented box is a thin plate hugging it (thickness: patch size squared over curvature
+/// radius), so its distance bound is nearly the patch's own, and only true near ties are
+/// opened.
+fn fit_oriented(nodes: &mut [Node], triangles: &[Tri]) {
+    let mut range = vec![(0u32, 0u32); nodes.len()];
+    let mut area = vec![[0.0; 3]; nodes.len()];
+    for i in (0..nodes.len()).rev() {
+        let node = nodes[i];
+        if node.is_leaf() {
+            range[i] = (node.first, node.first + node.count);
+            area[i] = triangles[node.first as usize..(node.first + node.count) as usize]
+                .iter()
+                .fold([0.0; 3], |a, t| {
+                    add(a, cross(sub(t[1], t[0]), sub(t[2], t[0])))
+                });
+        } else {
+            let (l, r) = (i + 1, node.first as usize);
+            range[i] = (range[l].0, range[r].1);
+            area[i] = add(area[l], area[r]);
+        }
+    }
+    nodes.par_iter_mut().enumerate().for_each(|(i, node)| {
+        let (start, end) = range[i];
+        let len = norm(area[i]);
+        if end - start > OBB_MAX || !(len > 0.0 && len.is_finite()) {
+            return;
+        }
+        let n = scale(area[i], 1.0 / len);
+        // Any unit vector across n: cross with the axis n is least along.
+        let axis = (0..3)
+            .min_by(|&a, &b| n[a].abs().total_cmp(&n[b].abs()))
+            .unwrap_or(0);
+        let mut e = [0.0; 3];
+        e[axis] = 1.0;
+        let u = cross(n, e);
+        let u = scale(u, 1.0 / norm(u));
+        let frame = [u, cross(n, u), n];
+        let mut extent = [[f64::INFINITY, f64::NEG_INFINITY]; 3];
+        for v in triangles[start as usize..end as usize].iter().flatten() {
+            for (axis, [lo, hi]) in frame.iter().zip(&mut extent) {
+                let s = dot(*axis, *v);
+                *lo = lo.min(s);
+                *hi = hi.max(s);
+            }
+        }
+        // Rounding in the projections must not lift the bound above a true distance.
+        for [lo, hi] in &mut extent {
+            let pad = 1e-12 * (lo.abs().max(hi.abs()) + (*hi - *lo));
+            *lo -= pad;
+            *hi += pad;
+        }
+        node.frame = frame;
+        node.extent = extent;
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check(bvh: &Bvh, i: usize, depth: usize, seen: &mut Vec<bool>) {
+        assert!(depth <= MAX_DEPTH);
+        let n = bvh.nodes[i];
+        if n.is_leaf() {
+            assert!((1..=LEAF as u32).contains(&n.count));
+            for t in &bvh.triangles[n.first as usize..(n.first + n.count) as usize] {
+                for p in t {
+                    assert!((0..3).all(|a| n.lo[a] <= p[a] && p[a] <= n.hi[a]));
+                }
+            }
+            for s in n.first..n.first + n.count {
+                assert!(!seen[s as usize], "triangle {s} in two leaves");
+                seen[s as usize] = true;
+            }
+        } else {
+            for c in [i + 1, n.first as usize] {
+                assert!(c > i);
+                let child = bvh.nodes[c];
+                for a in 0..3 {
+                    assert!(n.lo[a] <= child.lo[a] && child.hi[a] <= n.hi[a]);
+                }
+                check(bvh, c, depth + 1, seen);
+            }
+        }
+    }
+
+    fn triangles(n: usize, spread: impl Fn(usize) -> f64) -> Vec<Tri> {
+        (0..n)
+            .map(|i| {
+                let x = spread(i);
+                [[x, 0.0, 0.0], [x + 0.5, 1.0, 0.0], [x, 0.0, 1.0]]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn every_triangle_sits_in_one_leaf_inside_every_ancestor_box() {
+        // Uniform, exponentially spread (deep SAH trees) and all-equal centroids.
+        for tris in [
+            triangles(20_000, |i| i as f64),
+            triangles(3000, |i| 1.01f64.powi(i as i32)),
+            triangles(100, |_| 1.0),
+        ] {
+            let n = tris.len();
+            let bvh = build(tris);
+            let mut seen = vec![false; n];
+            check(&bvh, 0, 0, &mut seen);
+            assert!(seen.iter().all(|&s| s));
+        }
+    }
+}
