@@ -18,6 +18,12 @@ fn every_example_builds_watertight_manifold_outputs() {
         let scratch = tempfile::tempdir().expect("tempdir");
         let manifest = scratch.path().join(path.file_name().expect("name"));
         std::fs::copy(&path, &manifest).expect("copy");
+        // The meshes examples read, at the same relative place.
+        common::copy_dir(
+            &examples.join("meshes"),
+            &scratch.path().join("meshes"),
+            &[],
+        );
         let out = Command::new(common::BIN)
             .args(["build", "--report", "-", "-q"])
             .arg(&manifest)

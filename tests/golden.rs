@@ -32,7 +32,12 @@ fn blessing() -> bool {
 /// Runs the case in a scratch copy, so neither outputs nor cache land in the source tree.
 fn run_case(case: &Path, extra: &[&str]) -> std::process::Output {
     let scratch = tempfile::tempdir().expect("tempdir");
-    copy_inputs(case, scratch.path());
+    // The manifest and every file it may read (meshes), not the expected results.
+    common::copy_dir(
+        case,
+        scratch.path(),
+        &["summary.txt", "expected.txt", "args"],
+    );
     let mut args: Vec<String> = vec!["build".into(), "lattice.toml".into()];
     if let Ok(text) = std::fs::read_to_string(case.join("args")) {
         args.extend(
@@ -47,21 +52,6 @@ fn run_case(case: &Path, extra: &[&str]) -> std::process::Output {
         .current_dir(scratch.path())
         .output()
         .expect("run")
-}
-
-/// Copies the manifest and every file it may read (meshes, in subdirectories too), but not the
-/// expected results.
-fn copy_inputs(from: &Path, to: &Path) {
-    for entry in std::fs::read_dir(from).expect("case directory").flatten() {
-        let path = entry.path();
-        let name = entry.file_name();
-        if path.is_dir() {
-            std::fs::create_dir_all(to.join(&name)).expect("mkdir");
-            copy_inputs(&path, &to.join(&name));
-        } else if !matches!(name.to_str(), Some("summary.txt" | "expected.txt" | "args")) {
-            std::fs::copy(&path, to.join(&name)).expect("copy");
-        }
-    }
 }
 
 fn check(expected_file: &Path, actual: &str, case: &Path) -> Result<(), String> {

@@ -68,3 +68,21 @@ pub fn ran(reports: &serde_json::Value) -> Vec<String> {
     names.dedup();
     names
 }
+
+/// Copies the files of directory `from` into `to` (created), recursively, except the names in
+/// `skip`.
+pub fn copy_dir(from: &Path, to: &Path, skip: &[&str]) {
+    std::fs::create_dir_all(to).expect("mkdir");
+    for entry in std::fs::read_dir(from).expect("read dir").flatten() {
+        let path = entry.path();
+        let name = entry.file_name();
+        if name.to_str().is_some_and(|n| skip.contains(&n)) {
+            continue;
+        }
+        if path.is_dir() {
+            copy_dir(&path, &to.join(&name), skip);
+        } else {
+            std::fs::copy(&path, to.join(&name)).expect("copy");
+        }
+    }
+}
