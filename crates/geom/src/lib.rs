@@ -16,6 +16,7 @@ pub mod expr;
 pub mod field;
 pub mod mesh;
 pub mod mesh_io;
+pub mod sdf;
 pub mod spelling;
 pub mod symmetric;
 pub mod tpms;

@@ -1,0 +1,460 @@
+//! Sampling a compiled SDF on a grid, tile by tile, skipping what provably does not matter.
+//!
+//! A plane is cut into tiles of [`TILE_X`] × [`TILE_Y`] samples, aligned to the grid (not to
+//! the rows a caller asks for). For each tile the leaves are bounded by intervals over the
+//! tile *grown by one sample in every direction, including the planes above and below*, and
+//! the plan is evaluated on those intervals (`machine::intervals`):
+//!
+//! ```text
+//!     k+1  . . . . . .        The box of samples the interval covers: the tile (#) and
+//!     k    . # # # # .        its one-sample margin (.), in x, y and on planes k ± 1.
+//!     k−1  . . . . . .        If the whole box has one sign, no edge from a tile sample
+//! ```                         can cross the surface, so the tile's values are never
+//!                             interpolated and a constant of that sign replaces them.
+//!
+//! Otherwise the tile is computed, skipping operands of min/max that cannot win in it, which
+//! leaves every value bit-identical. So pruning changes no sign and no interpolated vertex:
+//! the mesh is the same with and without it (a test checks this). The proof is sound for any
+//! field, distance or not: it bounds the values that are actually sampled.
+//!
+//! Leaf intervals: a separable leaf (a TPMS, possibly scaled or moved) is bounded from its
+//! per-axis factor tables, by the smallest and largest table entry over the tile's index
+//! range, so the bound is about the very samples; other formulas by interval arithmetic over
+//! the tile's box; a `file` field by its value at the box centre ± half the box diagonal when
+//! it is a true distance, and not at all otherwise.
+//!
+//! Invariants:
+//! - Every sample is a pure function of its grid indices: tiles are fixed by the grid, sums
+//!   are taken in a fixed order, and a tile's decision depends only on the tile.
+//! - Memory per call is a few tiles of scratch; tables are one row per factor per axis.
+
+use std::ops::Range;
+
+use super::affine::Affine;
+use super::compile::{Leaf, Plan};
+use super::external::ExternalField;
+use super::interval::{Interval, eval_expr};
+use super::machine::{self, BLOCK, Stack, Step};
+use crate::expr::CompiledExpr;
+use crate::field::{Grid, PlaneSampler, ScalarField};
+
+/// Tile width (samples along x).
+pub const TILE_X: usize = 32;
+/// Tile height (samples along y).
+pub const TILE_Y: usize = BLOCK / TILE_X;
+
+pub(crate) struct SdfSampler<'a> {
+    plan: &'a Plan,
+    grid: Grid,
+    coords: [Vec<f64>; 3],
+    leaves: Vec<LeafSampler<'a>>,
+    pruning: bool,
+}
+
+enum LeafSampler<'a> {
+    Separable(Box<SeparableTiles>),
+    Pointwise(&'a CompiledExpr),
+    External {
+        field: &'a dyn ExternalField,
+        map: Affine,
+    },
+}
+
+/// A separable leaf `Σ_t c_t X_t(x) Y_t(y) Z_t(z)` sampled from per-axis tables.
+struct SeparableTiles {
+    /// `tables[axis][factor][index]`
+    tables: [Vec<Vec<f64>>; 3],
+    /// Terms as `(c, [x, y, z] factor or None for 1)`.
+    terms: Vec<(f64, [Option<usize>; 3])>,
+    /// Terms grouped by x factor, the group without one first.
+    groups: Vec<(Option<usize>, Vec<usize>)>,
+    /// `x_ranges[column tile][factor]`, `y_ranges[row tile][factor]`: table intervals over the
+    /// tile and its margin.
+    x_ranges: Vec<Vec<Interval>>,
+    y_ranges: Vec<Vec<Interval>>,
+}
+
+/// What a tile needs.
+enum Decision {
+    Fill(f64),
+    Compute { skip: bool },
+}
+
+impl<'a> SdfSampler<'a> {
+    pub fn new(plan: &'a Plan, grid: &Grid, pruning: bool) -> SdfSampler<'a> {
+        let coords = [grid.axis(0), grid.axis(1), grid.axis(2)];
+        let leaves = plan
+            .leaves
+            .iter()
+            .map(|leaf| match leaf {
+                Leaf::Formula(expr) => match expr.separable_form() {
+                    Some(_) => LeafSampler::Separable(Box::new(SeparableTiles::new(expr, &coords))),
+                    None => LeafSampler::Pointwise(expr),
+                },
+                Leaf::External { field, map } => LeafSampler::External {
+                    field: field.as_ref(),
+                    map: *map,
+                },
+            })
+            .collect();
+        SdfSampler {
+            plan,
+            grid: *grid,
+            coords,
+            leaves,
+            pruning,
+        }
+    }
+}
+
+/// Index range of tile `t` of size `size` along an axis of `n` samples.
+fn tile(t: usize, size: usize, n: usize) -> Range<usize> {
+    t * size..((t + 1) * size).min(n)
+}
+
+/// The tile's index range grown by the one-sample margin, as an inclusive range.
+fn with_margin(r: &Range<usize>, n: usize) -> (usize, usize) {
+    (r.start.saturating_sub(1), r.end.min(n - 1))
+}
+
+/// The smallest and largest of `values` (exact: no widening), flagging NaN.
+fn range_of(values: &[f64]) -> Interval {
+    let mut r = Interval {
+        lo: f64::INFINITY,
+        hi: f64::NEG_INFINITY,
+        nan: false,
+    };
+    for &v in values {
+        if v.is_nan() {
+            r.nan = true;
+        } else {
+            r.lo = r.lo.min(v);
+            r.hi = r.hi.max(v);
+        }
+    }
+    if r.nan { Interval::UNKNOWN } else { r }
+}
+
+impl SeparableTiles {
+    fn new(expr: &CompiledExpr, coords: &[Vec<f64>; 3]) -> SeparableTiles {
+        let form = expr
+            .separable_form()
+            .expect("only separable leaves get tables");
+        let tables: [Vec<Vec<f64>>; 3] = std::array::from_fn(|axis| {
+            let n = coords[axis].len();
+            let zeros = vec![0.0; n];
+            form.factors[axis]
+                .iter()
+                .map(|factor| {
+                    let mut inputs = [zeros.as_slice(); 3];
+                    inputs[axis] = &coords[axis];
+                    let mut out = vec![0.0; n];
+                    CompiledExpr::from_expr(factor).eval_points(
+                        inputs[0], inputs[1], inputs[2], &mut out,
+                    );
+                    out
+                })
+                .collect()
+        });
+        let terms: Vec<(f64, [Option<usize>; 3])> = form.terms.iter().map(|t| (t.c, t.f)).collect();
+        let mut groups: Vec<(Option<usize>, Vec<usize>)> = Vec::new();
+        for (i, t) in terms.iter().enumerate() {
+            match groups.iter_mut().find(|g| g.0 == t.1[0]) {
+                Some(g) => g.1.push(i),
+                None => groups.push((t.1[0], vec![i])),
+            }
+        }
+        groups.sort_by_key(|g| g.0.is_some());
+        let ranges = |axis: usize, size: usize| -> Vec<Vec<Interval>> {
+            let n = coords[axis].len();
+            (0..n.div_ceil(size))
+                .map(|t| {
+                    let (lo, hi) = with_margin(&tile(t, size, n), n);
+                    tables[axis].iter().map(|f| range_of(&f[lo..=hi])).collect()
+                })
+                .collect()
+        };
+        SeparableTiles {
+            x_ranges: ranges(0, TILE_X),
+            y_ranges: ranges(1, TILE_Y),
+            tables,
+            terms,
+            groups,
+        }
+    }
+
+    /// `z_ranges[factor]` for plane `k` and its neighbours.
+    fn z_ranges(&self, k: usize) -> Vec<Interval> {
+        let n = self.tables[2].first().map_or(1, Vec::len);
+        let (lo, hi) = with_margin(&(k..k + 1), n);
+        self.tables[2].iter().map(|f| range_of(&f[lo..=hi])).collect()
+    }
+
+    fn interval(&self, tx: usize, ty: usize, z: &[Interval]) -> Interval {
+        let mut sum = Interval::point(0.0);
+        for &(c, f) in &self.terms {
+            let mut term = Interval::point(c);
+            if let Some(x) = f[0] {
+                term = term.mul(self.x_ranges[tx][x]);
+            }
+            if let Some(y) = f[1] {
+                term = term.mul(self.y_ranges[ty][y]);
+            }
+            if let Some(zf) = f[2] {
+                term = term.mul(z[zf]);
+            }
+            sum = sum.add(term);
+        }
+        sum
+    }
+
+    /// Values on rows `rows`, columns `cols` of plane `k`, row after row into `out`.
+    fn fill(&self, k: usize, rows: Range<usize>, cols: Range<usize>, out: &mut [f64]) {
+        let width = cols.len();
+        for (j, row) in rows.zip(out.chunks_exact_mut(width)) {
+            row.fill(0.0);
+            for (x, members) in &self.groups {
+                let mut w = 0.0;
+                for &t in members {
+                    let (c, f) = self.terms[t];
+                    let mut v = c;
+                    if let Some(y) = f[1] {
+                        v *= self.tables[1][y][j];
+                    }
+                    if let Some(z) = f[2] {
+                        v *= self.tables[2][z][k];
+                    }
+                    w += v;
+                }
+                match x {
+                    None => row.iter_mut().for_each(|o| *o += w),
+                    Some(x) => {
+                        let xs = &self.tables[0][*x][cols.clone()];
+                        for (o, &xv) in row.iter_mut().zip(xs) {
+                            *o += xv * w;
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Scratch of one `sample_rows` call.
+struct Scratch {
+    stack: Stack,
+    leaf_intervals: Vec<Interval>,
+    op_intervals: Vec<Interval>,
+    steps: Vec<Step>,
+    xs: Vec<f64>,
+    ys: Vec<f64>,
+    zs: Vec<f64>,
+    mapped: [Vec<f64>; 3],
+}
+
+impl SdfSampler<'_> {
+    /// The grid box of the tile and its margin, in world coordinates.
+    fn world_box(&self, cols: &Range<usize>, rows: &Range<usize>, k: usize) -> [Interval; 3] {
+        let n = self.grid.counts;
+        let ranges = [
+            with_margin(cols, n[0]),
+            with_margin(rows, n[1]),
+            with_margin(&(k..k + 1), n[2]),
+        ];
+        std::array::from_fn(|a| {
+            let (lo, hi) = (self.coords[a][ranges[a].0], self.coords[a][ranges[a].1]);
+            Interval::new(lo.min(hi), lo.max(hi))
+        })
+    }
+
+    fn decide(
+        &self,
+        tx: usize,
+        ty: usize,
+        k: usize,
+        z_ranges: &[Vec<Interval>],
+        scratch: &mut Scratch,
+    ) -> Decision {
+        let n = self.grid.counts;
+        let cols = tile(tx, TILE_X, n[0]);
+        let rows = tile(ty, TILE_Y, n[1]);
+        let world = self.world_box(&cols, &rows, k);
+        scratch.leaf_intervals.clear();
+        for (l, leaf) in self.leaves.iter().enumerate() {
+            let interval = match leaf {
+                LeafSampler::Separable(s) => s.interval(tx, ty, &z_ranges[l]),
+                LeafSampler::Pointwise(expr) => eval_expr(expr.expr(), &world),
+                LeafSampler::External { field, map } => external_interval(*field, map, &world),
+            };
+            scratch.leaf_intervals.push(interval);
+        }
+        machine::intervals(self.plan, &scratch.leaf_intervals, &mut scratch.op_intervals);
+        let root = scratch.op_intervals[scratch.op_intervals.len() - 1];
+        if root.proves_outside() {
+            return Decision::Fill(root.lo);
+        }
+        if root.proves_inside() {
+            return Decision::Fill(root.hi);
+        }
+        let skip = machine::plan_steps(self.plan, &scratch.op_intervals, &mut scratch.steps);
+        Decision::Compute { skip }
+    }
+
+    /// Computes rows `rows` and columns `cols` of plane `k` into `out` (row-major).
+    fn compute(
+        &self,
+        k: usize,
+        rows: Range<usize>,
+        cols: Range<usize>,
+        steps: Option<&[Step]>,
+        scratch: &mut Scratch,
+        out: &mut [f64],
+    ) {
+        let count = rows.len() * cols.len();
+        let Scratch {
+            stack,
+            xs,
+            ys,
+            zs,
+            mapped,
+            ..
+        } = scratch;
+        xs.clear();
+        ys.clear();
+        zs.clear();
+        let coords = &self.coords;
+        let values = machine::run(self.plan, steps, count, stack, |l, dst| {
+            match &self.leaves[l] {
+                LeafSampler::Separable(s) => s.fill(k, rows.clone(), cols.clone(), dst),
+                LeafSampler::Pointwise(expr) => {
+                    points(coords, k, &rows, &cols, xs, ys, zs);
+                    expr.eval_points(xs, ys, zs, dst);
+                }
+                LeafSampler::External { field, map } => {
+                    points(coords, k, &rows, &cols, xs, ys, zs);
+                    for (a, m) in mapped.iter_mut().enumerate() {
+                        m.clear();
+                        m.extend((0..count).map(|i| {
+                            let row = map.m[a];
+                            row[0] * xs[i] + row[1] * ys[i] + row[2] * zs[i] + map.t[a]
+                        }));
+                    }
+                    field.eval_points(&mapped[0], &mapped[1], &mapped[2], dst);
+                }
+            }
+        });
+        out[..count].copy_from_slice(values);
+    }
+}
+
+/// The world coordinates of the samples of a tile, once per tile.
+fn points(
+    coords: &[Vec<f64>; 3],
+    k: usize,
+    rows: &Range<usize>,
+    cols: &Range<usize>,
+    xs: &mut Vec<f64>,
+    ys: &mut Vec<f64>,
+    zs: &mut Vec<f64>,
+) {
+    if !xs.is_empty() {
+        return;
+    }
+    for j in rows.clone() {
+        xs.extend_from_slice(&coords[0][cols.clone()]);
+        ys.extend(std::iter::repeat_n(coords[1][j], cols.len()));
+    }
+    zs.resize(xs.len(), coords[2][k]);
+}
+
+/// Bounds of a caller's field over a world box: by its value at the centre of the mapped box
+/// when it is 1-Lipschitz, otherwise none.
+fn external_interval(field: &dyn ExternalField, map: &Affine, world: &[Interval; 3]) -> Interval {
+    if !field.is_distance() {
+        return Interval::UNKNOWN;
+    }
+    let b = super::bounds::Aabb {
+        min: world.map(|i| i.lo),
+        max: world.map(|i| i.hi),
+    };
+    let local = map.image(&b);
+    let centre: [f64; 3] = std::array::from_fn(|a| 0.5 * (local.min[a] + local.max[a]));
+    let half_diagonal = 0.5
+        * (0..3)
+            .map(|a| (local.max[a] - local.min[a]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+    let mut v = [0.0];
+    field.eval_points(&[centre[0]], &[centre[1]], &[centre[2]], &mut v);
+    if !v[0].is_finite() || !half_diagonal.is_finite() {
+        return Interval::UNKNOWN;
+    }
+    Interval::new(v[0] - half_diagonal, v[0] + half_diagonal)
+}
+
+impl PlaneSampler for SdfSampler<'_> {
+    fn grid(&self) -> &Grid {
+        &self.grid
+    }
+
+    fn sample_rows(&self, k: usize, rows: Range<usize>, out: &mut [f64]) {
+        let [nx, ny, _] = self.grid.counts;
+        assert_eq!(out.len(), nx * rows.len(), "row buffer must hold nx * rows samples");
+        if rows.is_empty() || nx == 0 {
+            return;
+        }
+        let mut scratch = Scratch {
+            stack: Stack::new(self.plan),
+            leaf_intervals: Vec::with_capacity(self.leaves.len()),
+            op_intervals: Vec::with_capacity(self.plan.ops.len()),
+            steps: Vec::with_capacity(self.plan.ops.len()),
+            xs: Vec::with_capacity(BLOCK),
+            ys: Vec::with_capacity(BLOCK),
+            zs: Vec::with_capacity(BLOCK),
+            mapped: Default::default(),
+        };
+        let z_ranges: Vec<Vec<Interval>> = self
+            .leaves
+            .iter()
+            .map(|leaf| match leaf {
+                LeafSampler::Separable(s) if self.pruning => s.z_ranges(k),
+                _ => Vec::new(),
+            })
+            .collect();
+        let mut tile_values = vec![0.0; BLOCK];
+        for ty in rows.start / TILE_Y..rows.end.div_ceil(TILE_Y) {
+            let tile_rows = tile(ty, TILE_Y, ny);
+            let j0 = tile_rows.start.max(rows.start);
+            let j1 = tile_rows.end.min(rows.end);
+            for tx in 0..nx.div_ceil(TILE_X) {
+                let cols = tile(tx, TILE_X, nx);
+                let decision = if self.pruning {
+                    self.decide(tx, ty, k, &z_ranges, &mut scratch)
+                } else {
+                    Decision::Compute { skip: false }
+                };
+                let width = cols.len();
+                match decision {
+                    Decision::Fill(v) => tile_values[..(j1 - j0) * width].fill(v),
+                    Decision::Compute { skip } => {
+                        let steps = std::mem::take(&mut scratch.steps);
+                        let steps_used = skip.then_some(steps.as_slice());
+                        self.compute(
+                            k,
+                            j0..j1,
+                            cols.clone(),
+                            steps_used,
+                            &mut scratch,
+                            &mut tile_values,
+                        );
+                        scratch.steps = steps;
+                    }
+                }
+                for (r, j) in (j0..j1).enumerate() {
+                    let at = (j - rows.start) * nx + cols.start;
+                    out[at..at + width].copy_from_slice(&tile_values[r * width..(r + 1) * width]);
+                }
+            }
+        }
+    }
+}
