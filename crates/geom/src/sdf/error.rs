@@ -77,7 +77,7 @@ pub enum SdfError {
     #[error("the program has more than {limit} words after expanding `@file` includes")]
     TooManyWords { limit: usize },
 
-    #[error("{}: unclosed quote at byte {byte}", source_name(.file))]
+    #[error("{} has an unclosed quote at byte {byte}", source_name(.file))]
     UnclosedQuote { file: Option<Arc<str>>, byte: usize },
 }
 

@@ -172,7 +172,7 @@ mod tests {
         );
         assert_eq!(
             expand(&["@q"], &files).unwrap_err().to_string(),
-            "`q`: unclosed quote at byte 11"
+            "`q` has an unclosed quote at byte 11"
         );
     }
 }
