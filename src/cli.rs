@@ -47,7 +47,8 @@ enum Command {
     /// Fit a symmetric cell (from the cache when fresh) and print its coefficients and values
     Cell(CellArgs),
     /// Contour an SDF program in the Cesogen stack language (`latticebuild sdf ball scale 2`)
-    #[command(long_about = "Contour an SDF program in the Cesogen stack language: a Cesogen \
+    #[command(
+        long_about = "Contour an SDF program in the Cesogen stack language: a Cesogen \
                             command line with the program name replaced.\n\n\
                             Solids: ball, cylinder, box, tpms.NAME, expression FORMULA, file PATH. \
                             Unary: complement, offset R, shell T, move X,Y,Z, scale K or \
@@ -56,7 +57,8 @@ enum Command {
                             Options, anywhere among the words: -s SAMPLES (a total like 100^3, \
                             or NX,NY,NZ; default 60^3), -b X0,Y0,Z0,X1,Y1,Z1 (default: the \
                             solid's bounds), -o FILE (default out.ply; .stl .ply .obj .off .vtk), \
-                            -q (no summary).")]
+                            -q (no summary)."
+    )]
     Sdf(SdfArgs),
 }
 

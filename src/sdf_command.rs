@@ -161,8 +161,8 @@ fn command(args: &[String]) -> Result<(), Failure> {
     let program = Program::parse(&options.words).map_err(usage)?;
     let field = program.field(&MeshFiles).map_err(usage)?;
     let domain = options.domain.unwrap_or_else(|| field.domain());
-    let mesh = sdf::mesh(&field, &domain, options.samples)
-        .map_err(|e| Failure::Build(e.to_string()))?;
+    let mesh =
+        sdf::mesh(&field, &domain, options.samples).map_err(|e| Failure::Build(e.to_string()))?;
     let shown = options.output.display();
     if mesh.is_empty() {
         return Err(Failure::Build(format!(

@@ -25,14 +25,12 @@ fn stderr(out: &Output) -> String {
 /// The numbers of the summary line: triangles, vertices and volume.
 fn summary(out: &Output) -> (u64, u64, f64) {
     let text = stderr(out);
-    assert!(
-        out.status.success(),
-        "failed: {}\n{text}",
-        out.status
-    );
+    assert!(out.status.success(), "failed: {}\n{text}", out.status);
     assert!(text.contains("watertight, manifold"), "{text}");
     let number_before = |label: &str| -> f64 {
-        let at = text.find(label).unwrap_or_else(|| panic!("no `{label}` in {text}"));
+        let at = text
+            .find(label)
+            .unwrap_or_else(|| panic!("no `{label}` in {text}"));
         let start = text[..at].trim_end().rfind([' ', ':']).map_or(0, |i| i + 1);
         text[start..at].trim().parse().expect(label)
     };
@@ -162,7 +160,10 @@ fn a_file_that_includes_itself_is_an_error() {
 fn bad_input_exits_2_with_the_word_at_fault() {
     let dir = tempfile::tempdir().unwrap();
     let cases: [(&[&str], &str); 6] = [
-        (&["bal"], "error: word 1 `bal`: unknown word; did you mean `ball`?\n"),
+        (
+            &["bal"],
+            "error: word 1 `bal`: unknown word; did you mean `ball`?\n",
+        ),
         (
             &["-s", "60^3", "ball", "intersection"],
             "error: word 4 `intersection`: intersection needs two solids, found one\n",
@@ -182,7 +183,14 @@ fn bad_input_exits_2_with_the_word_at_fault() {
              file or directory (os error 2)\n",
         ),
         (
-            &["tpms.neovius", "scale", "0.065", "file", "part.stl", "intersection"],
+            &[
+                "tpms.neovius",
+                "scale",
+                "0.065",
+                "file",
+                "part.stl",
+                "intersection",
+            ],
             "error: word 4 `file`: `file` cannot be used: `file` words need mesh support, not \
              built yet\n",
         ),

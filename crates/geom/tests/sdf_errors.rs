@@ -45,7 +45,10 @@ fn stack_errors() {
 
 #[test]
 fn unknown_words_suggest_the_closest() {
-    assert_eq!(error("bal"), "word 1 `bal`: unknown word; did you mean `ball`?");
+    assert_eq!(
+        error("bal"),
+        "word 1 `bal`: unknown word; did you mean `ball`?"
+    );
     assert_eq!(
         error("ball cylinder unoin"),
         "word 3 `unoin`: unknown word; did you mean `union`?"

@@ -70,10 +70,7 @@ fn run(command: &str) -> Run {
         }
         i += 2;
     }
-    let field = Program::parse_args(&words)
-        .unwrap()
-        .field(&Files)
-        .unwrap();
+    let field = Program::parse_args(&words).unwrap().field(&Files).unwrap();
     let domain = domain.unwrap_or_else(|| field.domain());
     let mesh = sdf::mesh(&field, &domain, samples).unwrap();
     let check = check(&mesh);
@@ -189,7 +186,12 @@ fn endoskeleton_exoskeleton_and_shell() {
     assert!(endo.check.volume > 4.0 && endo.check.volume < 8.0);
     // The shell |f − 0.35| ≤ 0.35 is 0 ≤ f ≤ 0.7: the endoskeleton at 0.7 less the half below 0.
     let endo_07 = run("tpms.gyroid offset 0.7");
-    assert_close("shell", shell.check.volume, endo_07.check.volume - 4.0, 0.02);
+    assert_close(
+        "shell",
+        shell.check.volume,
+        endo_07.check.volume - 4.0,
+        0.02,
+    );
     assert_close(
         "shell counted",
         shell.check.volume,

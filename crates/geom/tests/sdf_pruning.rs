@@ -97,7 +97,10 @@ fn pruning_replaces_values_far_from_the_surface_only() {
             replaced += usize::from(x != y);
         }
     }
-    assert!(replaced > 90 * 90 * 45, "only {replaced} samples were skipped");
+    assert!(
+        replaced > 90 * 90 * 45,
+        "only {replaced} samples were skipped"
+    );
 }
 
 #[test]
@@ -119,7 +122,9 @@ fn samples_do_not_depend_on_the_rows_asked_for() {
                 sampler.sample_rows(k, rows.clone(), &mut part);
                 let want = &whole[rows.start * nx..rows.end * nx];
                 assert!(
-                    part.iter().zip(want).all(|(a, b)| a.to_bits() == b.to_bits()),
+                    part.iter()
+                        .zip(want)
+                        .all(|(a, b)| a.to_bits() == b.to_bits()),
                     "{program}: plane {k}, rows {rows:?}"
                 );
                 start = rows.end;

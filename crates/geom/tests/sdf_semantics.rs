@@ -28,7 +28,11 @@ fn check(program: &str, cases: &[([f64; 3], f64)]) {
 fn primitives() {
     check(
         "ball",
-        &[([0.0; 3], -1.0), ([2.0, 0.0, 0.0], 1.0), ([0.6, 0.8, 0.0], 0.0)],
+        &[
+            ([0.0; 3], -1.0),
+            ([2.0, 0.0, 0.0], 1.0),
+            ([0.6, 0.8, 0.0], 0.0),
+        ],
     );
     // Unit radius about z, infinitely long.
     check(
@@ -53,10 +57,17 @@ fn tpms_and_expressions() {
     // Gyroid C_x S_y + C_y S_z + C_z S_x with period 1.
     check(
         "tpms.gyroid",
-        &[([0.25, 0.0, 0.0], 1.0), ([0.0, 0.25, 0.0], 1.0), ([0.0; 3], 0.0)],
+        &[
+            ([0.25, 0.0, 0.0], 1.0),
+            ([0.0, 0.25, 0.0], 1.0),
+            ([0.0; 3], 0.0),
+        ],
     );
     // P: C_x + C_y + C_z, by an alias and in upper case.
-    check("tpms.Schwarz-P", &[([0.0; 3], 3.0), ([0.5, 0.5, 0.0], -1.0)]);
+    check(
+        "tpms.Schwarz-P",
+        &[([0.0; 3], 3.0), ([0.5, 0.5, 0.0], -1.0)],
+    );
     check("TPMS.P", &[([0.5; 3], -3.0)]);
     check(
         "expression \"x*x + y - z\"",
@@ -68,12 +79,22 @@ fn tpms_and_expressions() {
 #[test]
 fn value_transformations() {
     // eq. 8, 6, 7.
-    check("ball complement", &[([0.0; 3], 1.0), ([3.0, 0.0, 0.0], -2.0)]);
-    check("ball offset 0.5", &[([2.0, 0.0, 0.0], 0.5), ([0.0; 3], -1.5)]);
+    check(
+        "ball complement",
+        &[([0.0; 3], 1.0), ([3.0, 0.0, 0.0], -2.0)],
+    );
+    check(
+        "ball offset 0.5",
+        &[([2.0, 0.0, 0.0], 0.5), ([0.0; 3], -1.5)],
+    );
     check("ball offset -1/4", &[([2.0, 0.0, 0.0], 1.25)]);
     check(
         "ball shell 0.5",
-        &[([1.0, 0.0, 0.0], -0.25), ([0.0; 3], 0.75), ([3.0, 0.0, 0.0], 1.75)],
+        &[
+            ([1.0, 0.0, 0.0], -0.25),
+            ([0.0; 3], 0.75),
+            ([3.0, 0.0, 0.0], 1.75),
+        ],
     );
     // The eccentric shell |f − ξ| − Ξ/2 of eq. 15.
     check(
@@ -101,9 +122,16 @@ fn point_transformations() {
     // inside.
     check(
         "ball scale 2,1,1",
-        &[([4.0, 0.0, 0.0], 1.0), ([0.0; 3], -2.0), ([0.0, 2.0, 0.0], 1.0)],
+        &[
+            ([4.0, 0.0, 0.0], 1.0),
+            ([0.0; 3], -2.0),
+            ([0.0, 2.0, 0.0], 1.0),
+        ],
     );
-    check("ball scale 1,-3,1/2", &[([0.0, 6.0, 0.0], 0.5), ([0.0; 3], -3.0)]);
+    check(
+        "ball scale 1,-3,1/2",
+        &[([0.0, 6.0, 0.0], 0.5), ([0.0; 3], -3.0)],
+    );
     // eq. 5: f(R x) with R the Rodrigues matrix; R about z by π/2 takes x to y, so the ball
     // at (2, 0, 0) is seen where R x = (2, 0, 0), at x = (0, −2, 0).
     check(
@@ -130,7 +158,11 @@ fn point_transformations() {
     // A cylinder oriented along x with radius 1/2 (paper §4.3).
     check(
         "cylinder orient 1,0,0 scale 1/2",
-        &[([100.0, 0.0, 0.0], -0.5), ([0.0, 0.0, 1.0], 0.5), ([3.0, 0.3, 0.4], 0.0)],
+        &[
+            ([100.0, 0.0, 0.0], -0.5),
+            ([0.0, 0.0, 1.0], 0.5),
+            ([3.0, 0.3, 0.4], 0.0),
+        ],
     );
 }
 
@@ -140,16 +172,28 @@ fn binary_operations() {
     let b = "ball move 1,0,0";
     check(
         &format!("{a} {b} union"),
-        &[([0.0; 3], 0.0), ([-1.0, 0.0, 0.0], -1.0), ([1.5, 0.0, 0.0], -0.5)],
+        &[
+            ([0.0; 3], 0.0),
+            ([-1.0, 0.0, 0.0], -1.0),
+            ([1.5, 0.0, 0.0], -0.5),
+        ],
     );
     check(
         &format!("{a} {b} intersection"),
-        &[([0.0; 3], 0.0), ([-1.0, 0.0, 0.0], 1.0), ([0.0, 0.5, 0.0], (1.25f64).sqrt() - 1.0)],
+        &[
+            ([0.0; 3], 0.0),
+            ([-1.0, 0.0, 0.0], 1.0),
+            ([0.0, 0.5, 0.0], (1.25f64).sqrt() - 1.0),
+        ],
     );
     // A \ B = max(f_A, −f_B): order matters.
     check(
         &format!("{a} {b} difference"),
-        &[([-1.5, 0.0, 0.0], -0.5), ([1.0, 0.0, 0.0], 1.0), ([0.0; 3], 0.0)],
+        &[
+            ([-1.5, 0.0, 0.0], -0.5),
+            ([1.0, 0.0, 0.0], 1.0),
+            ([0.0; 3], 0.0),
+        ],
     );
     check(&format!("{b} {a} difference"), &[([1.5, 0.0, 0.0], -0.5)]);
 }
@@ -162,7 +206,10 @@ fn arguments_are_expressions() {
         // The centre c with R c = (1, 0, 0): c = Rᵀ (1, 0, 0) = (cos π/4, −sin π/4, 0).
         &[([FRAC_1_SQRT_2, -FRAC_1_SQRT_2, 0.0], -1.0)],
     );
-    check("ball move min(1,2),-(1),sqrt(0)", &[([1.0, -1.0, 0.0], -1.0)]);
+    check(
+        "ball move min(1,2),-(1),sqrt(0)",
+        &[([1.0, -1.0, 0.0], -1.0)],
+    );
     check("ball scale tau/(2*pi)", &[([2.0, 0.0, 0.0], 1.0)]);
     let _ = PI;
 }
@@ -201,7 +248,10 @@ fn sampler_agrees_with_points() {
             let mut points = vec![0.0; nx * ny];
             f.eval_points(&xs, &ys, &zs, &mut points);
             for (s, p) in plane.iter().zip(&points) {
-                assert!((s - p).abs() < 1e-9, "{program}: sampled {s}, evaluated {p}");
+                assert!(
+                    (s - p).abs() < 1e-9,
+                    "{program}: sampled {s}, evaluated {p}"
+                );
             }
         }
         let mut pruned_field = field(program);

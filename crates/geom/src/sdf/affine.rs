@@ -52,14 +52,12 @@ impl Affine {
 
     /// `self ∘ inner`: first `inner`, then `self`.
     pub fn after(&self, inner: &Affine) -> Affine {
-        let mut m = [[0.0; 3]; 3];
-        let mut t = self.t;
-        for i in 0..3 {
-            for j in 0..3 {
-                m[i][j] = (0..3).map(|k| self.m[i][k] * inner.m[k][j]).sum();
-                t[i] += self.m[i][j] * inner.t[j];
-            }
-        }
+        let m = std::array::from_fn(|i| {
+            std::array::from_fn(|j| (0..3).map(|k| self.m[i][k] * inner.m[k][j]).sum())
+        });
+        let t = std::array::from_fn(|i| {
+            self.t[i] + (0..3).map(|j| self.m[i][j] * inner.t[j]).sum::<f64>()
+        });
         Affine { m, t }
     }
 
@@ -70,7 +68,9 @@ impl Affine {
     }
 
     pub fn transpose_linear(&self) -> Affine {
-        Affine::linear(std::array::from_fn(|i| std::array::from_fn(|j| self.m[j][i])))
+        Affine::linear(std::array::from_fn(|i| {
+            std::array::from_fn(|j| self.m[j][i])
+        }))
     }
 
     pub fn is_identity(&self) -> bool {
@@ -168,7 +168,12 @@ mod tests {
 
     #[test]
     fn turning_z_takes_e3_to_the_direction() {
-        for v in [[1.0, 0.0, 0.0], [1.0, 2.0, 3.0], [0.0, -1.0, -5.0], [0.0, 0.0, 4.0]] {
+        for v in [
+            [1.0, 0.0, 0.0],
+            [1.0, 2.0, 3.0],
+            [0.0, -1.0, -5.0],
+            [0.0, 0.0, 4.0],
+        ] {
             let q = Affine::turning_z_to(v).apply([0.0, 0.0, 1.0]);
             assert!(close(q, unit(v)), "{v:?} → {q:?}");
         }
@@ -181,14 +186,21 @@ mod tests {
 
     #[test]
     fn images_of_boxes_contain_images_of_points() {
-        let a = Affine::rotation([1.0, 2.0, 0.5], 0.7).after(&Affine::translation([1.0, -2.0, 0.0]));
+        let a =
+            Affine::rotation([1.0, 2.0, 0.5], 0.7).after(&Affine::translation([1.0, -2.0, 0.0]));
         let b = Aabb {
             min: [-1.0, 0.0, 2.0],
             max: [0.5, 3.0, 2.5],
         };
         let image = a.image(&b);
         for corner in 0..8 {
-            let p = std::array::from_fn(|i| if corner >> i & 1 == 0 { b.min[i] } else { b.max[i] });
+            let p = std::array::from_fn(|i| {
+                if corner >> i & 1 == 0 {
+                    b.min[i]
+                } else {
+                    b.max[i]
+                }
+            });
             let q = a.apply(p);
             assert!((0..3).all(|i| image.min[i] <= q[i] + 1e-12 && q[i] <= image.max[i] + 1e-12));
         }

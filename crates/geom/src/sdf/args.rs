@@ -89,7 +89,11 @@ mod tests {
         assert_eq!(constant("-1.5e1"), Ok(-15.0));
         assert!(constant("x/2").unwrap_err().contains("uses a coordinate"));
         assert!(constant("1/0").unwrap_err().contains("not a finite number"));
-        assert!(constant("abc").unwrap_err().starts_with("`abc` is not a number"));
+        assert!(
+            constant("abc")
+                .unwrap_err()
+                .starts_with("`abc` is not a number")
+        );
     }
 
     #[test]

@@ -57,7 +57,12 @@ impl Aabb {
     }
 
     pub fn is_empty(&self) -> bool {
-        (0..3).any(|a| !(self.min[a] <= self.max[a]))
+        // NaN sides count as empty too.
+        (0..3).any(|a| {
+            self.min[a]
+                .partial_cmp(&self.max[a])
+                .is_none_or(|o| o.is_gt())
+        })
     }
 
     /// Finite on every side.

@@ -42,11 +42,19 @@ pub(crate) enum ValueOp {
     /// Push the value of a leaf.
     Leaf(usize),
     /// `v ← mul·v + add`
-    Affine { mul: f64, add: f64 },
+    Affine {
+        mul: f64,
+        add: f64,
+    },
     /// `v ← above·v` where `v ≥ 0`, `below·v` where `v < 0` (eq. 4 as `min_i |κ_i| v`).
-    SignScale { above: f64, below: f64 },
+    SignScale {
+        above: f64,
+        below: f64,
+    },
     /// `v ← |v| − half`
-    Shell { half: f64 },
+    Shell {
+        half: f64,
+    },
     Min,
     Max,
     /// `max(a, −b)`
@@ -127,7 +135,10 @@ impl Plan {
                 continue;
             }
             let op = match &node.op {
-                Op::Complement => ValueOp::Affine { mul: -1.0, add: 0.0 },
+                Op::Complement => ValueOp::Affine {
+                    mul: -1.0,
+                    add: 0.0,
+                },
                 Op::Offset(xi) => ValueOp::Affine { mul: 1.0, add: -xi },
                 Op::Scale(k) => ValueOp::Affine {
                     mul: k.abs(),

@@ -138,7 +138,16 @@ mod tests {
         let words = expand(&["-s", "40^3", "@a", "complement"], &files).unwrap();
         assert_eq!(
             texts(&words),
-            ["-s", "40^3", "ball", "cylinder", "scale", "1/2", "union", "complement"]
+            [
+                "-s",
+                "40^3",
+                "ball",
+                "cylinder",
+                "scale",
+                "1/2",
+                "union",
+                "complement"
+            ]
         );
         assert_eq!(words[3].origin.to_string(), "word 1 of `b`");
         assert_eq!(words[6].origin.to_string(), "word 3 of `a`");
@@ -148,7 +157,10 @@ mod tests {
     #[test]
     fn the_same_file_twice_is_fine_but_a_cycle_is_an_error() {
         let files = Files(HashMap::from([("b", "ball"), ("two", "@b @b union")]));
-        assert_eq!(texts(&expand(&["@two"], &files).unwrap()), ["ball", "ball", "union"]);
+        assert_eq!(
+            texts(&expand(&["@two"], &files).unwrap()),
+            ["ball", "ball", "union"]
+        );
 
         let files = Files(HashMap::from([("a", "ball @b"), ("b", "@a union")]));
         let err = expand(&["@a"], &files).unwrap_err();

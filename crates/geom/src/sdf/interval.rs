@@ -165,10 +165,16 @@ impl Interval {
             nan: self.nan && b.nan,
         };
         if self.nan {
-            r = Interval { nan: r.nan, ..r.hull(&b) };
+            r = Interval {
+                nan: r.nan,
+                ..r.hull(&b)
+            };
         }
         if b.nan {
-            r = Interval { nan: r.nan, ..r.hull(&self) };
+            r = Interval {
+                nan: r.nan,
+                ..r.hull(&self)
+            };
         }
         r
     }
@@ -392,6 +398,10 @@ mod tests {
         let m = maybe_nan.max(Interval::point(5.0));
         assert!(!m.nan && m.lo >= 5.0 - 1e-9 && m.hi >= 5.0);
         assert!(Interval::new(1.0, 2.0).div(Interval::new(-1.0, 1.0)) == Interval::UNKNOWN);
-        assert!(!Interval::point(0.0).add(Interval::point(0.0)).proves_outside());
+        assert!(
+            !Interval::point(0.0)
+                .add(Interval::point(0.0))
+                .proves_outside()
+        );
     }
 }

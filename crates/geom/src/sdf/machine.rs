@@ -109,26 +109,27 @@ fn slot(stack: &mut Stack, index: usize, n: usize) -> &mut [f64] {
     &mut stack.data[index * BLOCK..index * BLOCK + n]
 }
 
-/// The interval of every operation's value, given the intervals of the leaves.
+/// The interval of every operation's value, given the intervals of the leaves. Operands are
+/// read from `out` itself: a unary operation's is the one before it, a binary operation's
+/// right operand ends before it and its left operand ends where the right one starts.
 pub fn intervals(plan: &Plan, leaves: &[Interval], out: &mut Vec<Interval>) {
     out.clear();
-    let mut stack: Vec<Interval> = Vec::with_capacity(plan.depth);
-    for op in &plan.ops {
+    for (i, op) in plan.ops.iter().enumerate() {
         let value = match *op {
             ValueOp::Leaf(l) => leaves[l],
-            ValueOp::Affine { mul, add } => pop(&mut stack).scale(mul).add(Interval::point(add)),
+            ValueOp::Affine { mul, add } => out[i - 1].scale(mul).add(Interval::point(add)),
             ValueOp::SignScale { above, below } => {
                 // Increasing in v, so the ends map to the ends.
-                let v = pop(&mut stack);
+                let v = out[i - 1];
                 let f = |x: f64| x * if x >= 0.0 { above } else { below };
                 let mut r = Interval::new(f(v.lo), f(v.hi));
                 r.nan = v.nan;
                 r
             }
-            ValueOp::Shell { half } => pop(&mut stack).abs().sub(Interval::point(half)),
+            ValueOp::Shell { half } => out[i - 1].abs().sub(Interval::point(half)),
             ValueOp::Min | ValueOp::Max | ValueOp::Difference => {
-                let b = pop(&mut stack);
-                let a = pop(&mut stack);
+                let b = out[i - 1];
+                let a = out[plan.subtree_start[i - 1] - 1];
                 match op {
                     ValueOp::Min => a.min(b),
                     ValueOp::Max => a.max(b),
@@ -136,13 +137,8 @@ pub fn intervals(plan: &Plan, leaves: &[Interval], out: &mut Vec<Interval>) {
                 }
             }
         };
-        stack.push(value);
         out.push(value);
     }
-}
-
-fn pop(stack: &mut Vec<Interval>) -> Interval {
-    stack.pop().unwrap_or(Interval::UNKNOWN)
 }
 
 /// Which operations a block needs, given every operation's interval: an operand of a min or
@@ -166,7 +162,11 @@ pub fn plan_steps(plan: &Plan, values: &[Interval], steps: &mut Vec<Step>) -> bo
                 let right = i - 1;
                 let left = plan.subtree_start[right] - 1;
                 let (a, b) = (values[left], values[right]);
-                let b = if op == ValueOp::Difference { b.neg() } else { b };
+                let b = if op == ValueOp::Difference {
+                    b.neg()
+                } else {
+                    b
+                };
                 let sure = !a.nan && !b.nan;
                 let (keep_left, keep_right) = match op {
                     ValueOp::Max if sure && a.lo > b.hi => (true, false),

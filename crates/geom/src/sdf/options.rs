@@ -80,7 +80,11 @@ pub fn spread_samples(total: u64) -> [usize; 3] {
     for axis in 0..3 {
         let mut trial = counts;
         trial[axis] += 1;
-        if trial.iter().try_fold(1u64, |p, &c| p.checked_mul(c)).is_some_and(|p| p <= total) {
+        if trial
+            .iter()
+            .try_fold(1u64, |p, &c| p.checked_mul(c))
+            .is_some_and(|p| p <= total)
+        {
             counts = trial;
         }
     }
@@ -90,12 +94,11 @@ pub fn spread_samples(total: u64) -> [usize; 3] {
 /// The box of `-b` text: `x0,y0,z0,x1,y1,z1`.
 pub fn parse_box(text: &str) -> Result<Aabb, OptionError> {
     let values = args::constants(text).map_err(OptionError::NotANumber)?;
-    let [x0, y0, z0, x1, y1, z1] = <[f64; 6]>::try_from(values.as_slice()).map_err(|_| {
-        OptionError::BoxComponents {
+    let [x0, y0, z0, x1, y1, z1] =
+        <[f64; 6]>::try_from(values.as_slice()).map_err(|_| OptionError::BoxComponents {
             text: text.to_string(),
             count: values.len(),
-        }
-    })?;
+        })?;
     let b = Aabb {
         min: [x0, y0, z0],
         max: [x1, y1, z1],
@@ -138,7 +141,10 @@ mod tests {
             parse_samples("1,2"),
             Err(OptionError::SampleComponents { count: 2, .. })
         ));
-        assert!(matches!(parse_samples("many"), Err(OptionError::NotANumber(_))));
+        assert!(matches!(
+            parse_samples("many"),
+            Err(OptionError::NotANumber(_))
+        ));
     }
 
     #[test]

@@ -245,9 +245,10 @@ impl<'w> Parser<'w> {
                     }
                     Ok(v)
                 })?;
-                let angle = self.read(word, "rotate", "an angle in radians after its axis", |t| {
-                    args::constant(t)
-                })?;
+                let angle =
+                    self.read(word, "rotate", "an angle in radians after its axis", |t| {
+                        args::constant(t)
+                    })?;
                 Op::Rotate { axis, angle }
             }
             "orient" => {

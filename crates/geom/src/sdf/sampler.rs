@@ -31,17 +31,19 @@
 use std::ops::Range;
 
 use super::affine::Affine;
-use super::compile::{Leaf, Plan};
+use super::compile::{Leaf, Plan, ValueOp};
 use super::external::ExternalField;
 use super::interval::{Interval, eval_expr};
 use super::machine::{self, BLOCK, Stack, Step};
 use crate::expr::CompiledExpr;
 use crate::field::{Grid, PlaneSampler, ScalarField};
 
-/// Tile width (samples along x).
+/// Tile width (samples along x); at most the machine's block.
 pub const TILE_X: usize = 32;
-/// Tile height (samples along y).
-pub const TILE_Y: usize = BLOCK / TILE_X;
+/// Tile height (samples along y). 32 × 8 measured best for the Figure 6 command at 400³
+/// among 16–64 × 4–16.
+pub const TILE_Y: usize = 8;
+const _: () = assert!(TILE_X <= BLOCK, "a tile row is one block of the machine");
 
 pub(crate) struct SdfSampler<'a> {
     plan: &'a Plan,
@@ -75,9 +77,13 @@ struct SeparableTiles {
 }
 
 /// What a tile needs.
+#[derive(Clone, Copy)]
 enum Decision {
+    /// Every sample of the tile and its margin has this value's sign.
     Fill(f64),
-    Compute { skip: bool },
+    /// Compute the tile; `steps` is where its steps start in the band's list when it skips
+    /// work.
+    Compute { steps: Option<usize> },
 }
 
 impl<'a> SdfSampler<'a> {
@@ -149,9 +155,8 @@ impl SeparableTiles {
                     let mut inputs = [zeros.as_slice(); 3];
                     inputs[axis] = &coords[axis];
                     let mut out = vec![0.0; n];
-                    CompiledExpr::from_expr(factor).eval_points(
-                        inputs[0], inputs[1], inputs[2], &mut out,
-                    );
+                    CompiledExpr::from_expr(factor)
+                        .eval_points(inputs[0], inputs[1], inputs[2], &mut out);
                     out
                 })
                 .collect()
@@ -187,55 +192,89 @@ impl SeparableTiles {
     fn z_ranges(&self, k: usize) -> Vec<Interval> {
         let n = self.tables[2].first().map_or(1, Vec::len);
         let (lo, hi) = with_margin(&(k..k + 1), n);
-        self.tables[2].iter().map(|f| range_of(&f[lo..=hi])).collect()
+        self.tables[2]
+            .iter()
+            .map(|f| range_of(&f[lo..=hi]))
+            .collect()
     }
 
-    fn interval(&self, tx: usize, ty: usize, z: &[Interval]) -> Interval {
+    /// The interval of each group's weight `Σ c · Y · Z` over row tile `ty` and plane `k`
+    /// (with margins): shared by every tile of the band.
+    fn band_weights(&self, ty: usize, z: &[Interval], out: &mut Vec<Interval>) {
+        out.clear();
+        for (_, members) in &self.groups {
+            let mut w = Interval::point(0.0);
+            for &t in members {
+                let (c, f) = self.terms[t];
+                let mut v = Interval::point(c);
+                if let Some(y) = f[1] {
+                    v = v.mul(self.y_ranges[ty][y]);
+                }
+                if let Some(zf) = f[2] {
+                    v = v.mul(z[zf]);
+                }
+                w = w.add(v);
+            }
+            out.push(w);
+        }
+    }
+
+    /// The interval of the leaf over column tile `tx`, from its band's weights.
+    fn interval(&self, tx: usize, weights: &[Interval]) -> Interval {
         let mut sum = Interval::point(0.0);
-        for &(c, f) in &self.terms {
-            let mut term = Interval::point(c);
-            if let Some(x) = f[0] {
-                term = term.mul(self.x_ranges[tx][x]);
-            }
-            if let Some(y) = f[1] {
-                term = term.mul(self.y_ranges[ty][y]);
-            }
-            if let Some(zf) = f[2] {
-                term = term.mul(z[zf]);
-            }
-            sum = sum.add(term);
+        for ((x, _), w) in self.groups.iter().zip(weights) {
+            sum = sum.add(match x {
+                None => *w,
+                Some(x) => self.x_ranges[tx][*x].mul(*w),
+            });
         }
         sum
     }
 
-    /// Values on rows `rows`, columns `cols` of plane `k`, row after row into `out`.
-    fn fill(&self, k: usize, rows: Range<usize>, cols: Range<usize>, out: &mut [f64]) {
-        let width = cols.len();
-        for (j, row) in rows.zip(out.chunks_exact_mut(width)) {
-            row.fill(0.0);
-            for (x, members) in &self.groups {
-                let mut w = 0.0;
-                for &t in members {
-                    let (c, f) = self.terms[t];
-                    let mut v = c;
-                    if let Some(y) = f[1] {
-                        v *= self.tables[1][y][j];
-                    }
-                    if let Some(z) = f[2] {
-                        v *= self.tables[2][z][k];
-                    }
-                    w += v;
+    /// Each group's weight `Σ c · Y[j] · Z[k]` for row `j` of plane `k`, summed in term order.
+    fn row_weights(&self, j: usize, k: usize, out: &mut Vec<f64>) {
+        out.clear();
+        for (_, members) in &self.groups {
+            let mut w = 0.0;
+            for &t in members {
+                let (c, f) = self.terms[t];
+                let mut v = c;
+                if let Some(y) = f[1] {
+                    v *= self.tables[1][y][j];
                 }
-                match x {
-                    None => row.iter_mut().for_each(|o| *o += w),
-                    Some(x) => {
-                        let xs = &self.tables[0][*x][cols.clone()];
-                        for (o, &xv) in row.iter_mut().zip(xs) {
-                            *o += xv * w;
-                        }
+                if let Some(z) = f[2] {
+                    v *= self.tables[2][z][k];
+                }
+                w += v;
+            }
+            out.push(w);
+        }
+    }
+
+    /// Values on columns `cols` of the row whose weights are `weights`: the group without an
+    /// x factor first, then `X[i] · w` for each group in order.
+    fn fill(&self, weights: &[f64], cols: Range<usize>, out: &mut [f64]) {
+        let mut first = true;
+        for ((x, _), &w) in self.groups.iter().zip(weights) {
+            match (x, first) {
+                (None, _) => out.fill(w),
+                (Some(x), true) => {
+                    let xs = &self.tables[0][*x][cols.clone()];
+                    for (o, &xv) in out.iter_mut().zip(xs) {
+                        *o = xv * w;
+                    }
+                }
+                (Some(x), false) => {
+                    let xs = &self.tables[0][*x][cols.clone()];
+                    for (o, &xv) in out.iter_mut().zip(xs) {
+                        *o += xv * w;
                     }
                 }
             }
+            first = false;
+        }
+        if first {
+            out.fill(0.0);
         }
     }
 }
@@ -245,7 +284,11 @@ struct Scratch {
     stack: Stack,
     leaf_intervals: Vec<Interval>,
     op_intervals: Vec<Interval>,
-    steps: Vec<Step>,
+    /// Per leaf: the band's group weight intervals (separable leaves), then the row's weights.
+    band_weights: Vec<Vec<Interval>>,
+    row_weights: Vec<Vec<f64>>,
+    /// The steps of the tile being decided.
+    tile_steps: Vec<Step>,
     xs: Vec<f64>,
     ys: Vec<f64>,
     zs: Vec<f64>,
@@ -267,28 +310,30 @@ impl SdfSampler<'_> {
         })
     }
 
-    fn decide(
-        &self,
-        tx: usize,
-        ty: usize,
-        k: usize,
-        z_ranges: &[Vec<Interval>],
-        scratch: &mut Scratch,
-    ) -> Decision {
+    /// Decides tile `tx` of band `ty` on plane `k`; the steps of a tile that skips work are
+    /// left in `scratch.tile_steps`.
+    fn decide(&self, tx: usize, ty: usize, k: usize, scratch: &mut Scratch) -> Decision {
         let n = self.grid.counts;
         let cols = tile(tx, TILE_X, n[0]);
         let rows = tile(ty, TILE_Y, n[1]);
-        let world = self.world_box(&cols, &rows, k);
+        let mut world = None;
         scratch.leaf_intervals.clear();
         for (l, leaf) in self.leaves.iter().enumerate() {
+            let mut world_box = || *world.get_or_insert_with(|| self.world_box(&cols, &rows, k));
             let interval = match leaf {
-                LeafSampler::Separable(s) => s.interval(tx, ty, &z_ranges[l]),
-                LeafSampler::Pointwise(expr) => eval_expr(expr.expr(), &world),
-                LeafSampler::External { field, map } => external_interval(*field, map, &world),
+                LeafSampler::Separable(s) => s.interval(tx, &scratch.band_weights[l]),
+                LeafSampler::Pointwise(expr) => eval_expr(expr.expr(), &world_box()),
+                LeafSampler::External { field, map } => {
+                    external_interval(*field, map, &world_box())
+                }
             };
             scratch.leaf_intervals.push(interval);
         }
-        machine::intervals(self.plan, &scratch.leaf_intervals, &mut scratch.op_intervals);
+        machine::intervals(
+            self.plan,
+            &scratch.leaf_intervals,
+            &mut scratch.op_intervals,
+        );
         let root = scratch.op_intervals[scratch.op_intervals.len() - 1];
         if root.proves_outside() {
             return Decision::Fill(root.lo);
@@ -296,23 +341,26 @@ impl SdfSampler<'_> {
         if root.proves_inside() {
             return Decision::Fill(root.hi);
         }
-        let skip = machine::plan_steps(self.plan, &scratch.op_intervals, &mut scratch.steps);
-        Decision::Compute { skip }
+        let skips = machine::plan_steps(self.plan, &scratch.op_intervals, &mut scratch.tile_steps);
+        Decision::Compute {
+            steps: skips.then_some(0),
+        }
     }
 
-    /// Computes rows `rows` and columns `cols` of plane `k` into `out` (row-major).
+    /// Computes columns `cols` of row `j` of plane `k` into `out`.
     fn compute(
         &self,
         k: usize,
-        rows: Range<usize>,
+        j: usize,
         cols: Range<usize>,
         steps: Option<&[Step]>,
         scratch: &mut Scratch,
         out: &mut [f64],
     ) {
-        let count = rows.len() * cols.len();
+        let count = cols.len();
         let Scratch {
             stack,
+            row_weights,
             xs,
             ys,
             zs,
@@ -320,38 +368,41 @@ impl SdfSampler<'_> {
             ..
         } = scratch;
         xs.clear();
-        ys.clear();
-        zs.clear();
         let coords = &self.coords;
-        let values = machine::run(self.plan, steps, count, stack, |l, dst| {
-            match &self.leaves[l] {
-                LeafSampler::Separable(s) => s.fill(k, rows.clone(), cols.clone(), dst),
-                LeafSampler::Pointwise(expr) => {
-                    points(coords, k, &rows, &cols, xs, ys, zs);
-                    expr.eval_points(xs, ys, zs, dst);
-                }
-                LeafSampler::External { field, map } => {
-                    points(coords, k, &rows, &cols, xs, ys, zs);
-                    for (a, m) in mapped.iter_mut().enumerate() {
-                        m.clear();
-                        m.extend((0..count).map(|i| {
-                            let row = map.m[a];
-                            row[0] * xs[i] + row[1] * ys[i] + row[2] * zs[i] + map.t[a]
-                        }));
-                    }
-                    field.eval_points(&mapped[0], &mapped[1], &mapped[2], dst);
-                }
+        let mut leaf = |l: usize, dst: &mut [f64]| match &self.leaves[l] {
+            LeafSampler::Separable(s) => s.fill(&row_weights[l], cols.clone(), dst),
+            LeafSampler::Pointwise(expr) => {
+                points(coords, k, j, &cols, xs, ys, zs);
+                expr.eval_points(xs, ys, zs, dst);
             }
-        });
-        out[..count].copy_from_slice(values);
+            LeafSampler::External { field, map } => {
+                points(coords, k, j, &cols, xs, ys, zs);
+                for (a, m) in mapped.iter_mut().enumerate() {
+                    let row = map.m[a];
+                    m.clear();
+                    m.extend(
+                        (0..count)
+                            .map(|i| row[0] * xs[i] + row[1] * ys[i] + row[2] * zs[i] + map.t[a]),
+                    );
+                }
+                field.eval_points(&mapped[0], &mapped[1], &mapped[2], dst);
+            }
+        };
+        if let [ValueOp::Leaf(l)] = self.plan.ops.as_slice() {
+            // A lone leaf writes straight into the output.
+            leaf(*l, out);
+            return;
+        }
+        let values = machine::run(self.plan, steps, count, stack, leaf);
+        out.copy_from_slice(values);
     }
 }
 
-/// The world coordinates of the samples of a tile, once per tile.
+/// The world coordinates of a row segment, once per segment.
 fn points(
     coords: &[Vec<f64>; 3],
     k: usize,
-    rows: &Range<usize>,
+    j: usize,
     cols: &Range<usize>,
     xs: &mut Vec<f64>,
     ys: &mut Vec<f64>,
@@ -360,11 +411,11 @@ fn points(
     if !xs.is_empty() {
         return;
     }
-    for j in rows.clone() {
-        xs.extend_from_slice(&coords[0][cols.clone()]);
-        ys.extend(std::iter::repeat_n(coords[1][j], cols.len()));
-    }
-    zs.resize(xs.len(), coords[2][k]);
+    xs.extend_from_slice(&coords[0][cols.clone()]);
+    ys.clear();
+    ys.resize(cols.len(), coords[1][j]);
+    zs.clear();
+    zs.resize(cols.len(), coords[2][k]);
 }
 
 /// Bounds of a caller's field over a world box: by its value at the centre of the mapped box
@@ -399,18 +450,26 @@ impl PlaneSampler for SdfSampler<'_> {
 
     fn sample_rows(&self, k: usize, rows: Range<usize>, out: &mut [f64]) {
         let [nx, ny, _] = self.grid.counts;
-        assert_eq!(out.len(), nx * rows.len(), "row buffer must hold nx * rows samples");
+        assert_eq!(
+            out.len(),
+            nx * rows.len(),
+            "row buffer must hold nx * rows samples"
+        );
         if rows.is_empty() || nx == 0 {
             return;
         }
+        let ops = self.plan.ops.len();
+        let leaves = self.leaves.len();
         let mut scratch = Scratch {
             stack: Stack::new(self.plan),
-            leaf_intervals: Vec::with_capacity(self.leaves.len()),
-            op_intervals: Vec::with_capacity(self.plan.ops.len()),
-            steps: Vec::with_capacity(self.plan.ops.len()),
-            xs: Vec::with_capacity(BLOCK),
-            ys: Vec::with_capacity(BLOCK),
-            zs: Vec::with_capacity(BLOCK),
+            leaf_intervals: Vec::with_capacity(leaves),
+            op_intervals: Vec::with_capacity(ops),
+            band_weights: vec![Vec::new(); leaves],
+            row_weights: vec![Vec::new(); leaves],
+            tile_steps: Vec::with_capacity(ops),
+            xs: Vec::with_capacity(TILE_X),
+            ys: Vec::with_capacity(TILE_X),
+            zs: Vec::with_capacity(TILE_X),
             mapped: Default::default(),
         };
         let z_ranges: Vec<Vec<Interval>> = self
@@ -421,38 +480,50 @@ impl PlaneSampler for SdfSampler<'_> {
                 _ => Vec::new(),
             })
             .collect();
-        let mut tile_values = vec![0.0; BLOCK];
+        let tiles_x = nx.div_ceil(TILE_X);
+        // Per column tile of a band: what to do, and the steps of the tiles that skip work.
+        let mut decisions: Vec<Decision> = Vec::with_capacity(tiles_x);
+        let mut band_steps: Vec<Step> = Vec::new();
         for ty in rows.start / TILE_Y..rows.end.div_ceil(TILE_Y) {
-            let tile_rows = tile(ty, TILE_Y, ny);
-            let j0 = tile_rows.start.max(rows.start);
-            let j1 = tile_rows.end.min(rows.end);
-            for tx in 0..nx.div_ceil(TILE_X) {
-                let cols = tile(tx, TILE_X, nx);
-                let decision = if self.pruning {
-                    self.decide(tx, ty, k, &z_ranges, &mut scratch)
-                } else {
-                    Decision::Compute { skip: false }
-                };
-                let width = cols.len();
-                match decision {
-                    Decision::Fill(v) => tile_values[..(j1 - j0) * width].fill(v),
-                    Decision::Compute { skip } => {
-                        let steps = std::mem::take(&mut scratch.steps);
-                        let steps_used = skip.then_some(steps.as_slice());
-                        self.compute(
-                            k,
-                            j0..j1,
-                            cols.clone(),
-                            steps_used,
-                            &mut scratch,
-                            &mut tile_values,
-                        );
-                        scratch.steps = steps;
+            let band = tile(ty, TILE_Y, ny);
+            decisions.clear();
+            band_steps.clear();
+            if self.pruning {
+                for (l, leaf) in self.leaves.iter().enumerate() {
+                    if let LeafSampler::Separable(s) = leaf {
+                        s.band_weights(ty, &z_ranges[l], &mut scratch.band_weights[l]);
                     }
                 }
-                for (r, j) in (j0..j1).enumerate() {
-                    let at = (j - rows.start) * nx + cols.start;
-                    out[at..at + width].copy_from_slice(&tile_values[r * width..(r + 1) * width]);
+                for tx in 0..tiles_x {
+                    let mut decision = self.decide(tx, ty, k, &mut scratch);
+                    if let Decision::Compute { steps: Some(_) } = decision {
+                        decision = Decision::Compute {
+                            steps: Some(band_steps.len()),
+                        };
+                        band_steps.extend_from_slice(&scratch.tile_steps);
+                    }
+                    decisions.push(decision);
+                }
+            } else {
+                decisions.resize(tiles_x, Decision::Compute { steps: None });
+            }
+            for j in band.start.max(rows.start)..band.end.min(rows.end) {
+                let row = &mut out[(j - rows.start) * nx..(j - rows.start + 1) * nx];
+                for (l, leaf) in self.leaves.iter().enumerate() {
+                    if let LeafSampler::Separable(s) = leaf {
+                        s.row_weights(j, k, &mut scratch.row_weights[l]);
+                    }
+                }
+                for (tx, decision) in decisions.iter().enumerate() {
+                    let cols = tile(tx, TILE_X, nx);
+                    match *decision {
+                        Decision::Fill(v) => row[cols].fill(v),
+                        Decision::Compute { steps } => {
+                            let steps = steps.map(|at| &band_steps[at..at + ops]);
+                            let dst = &mut row[cols.clone()];
+                            self.compute(k, j, cols, steps, &mut scratch, dst);
+                        }
+                    }
                 }
             }
         }

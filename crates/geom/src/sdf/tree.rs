@@ -64,7 +64,12 @@ impl Op {
     /// How many solids the operation takes from the stack.
     pub fn arity(&self) -> usize {
         match self {
-            Op::Ball | Op::Cylinder | Op::Box | Op::Tpms(_) | Op::Expression { .. } | Op::File(_) => 0,
+            Op::Ball
+            | Op::Cylinder
+            | Op::Box
+            | Op::Tpms(_)
+            | Op::Expression { .. }
+            | Op::File(_) => 0,
             Op::Union | Op::Intersection | Op::Difference => 2,
             _ => 1,
         }
