@@ -50,6 +50,8 @@ pub(crate) struct SdfSampler<'a> {
     grid: Grid,
     coords: [Vec<f64>; 3],
     leaves: Vec<LeafSampler<'a>>,
+    /// The index of each leaf's operation in the plan.
+    leaf_ops: Vec<usize>,
     pruning: bool,
 }
 
@@ -103,11 +105,18 @@ impl<'a> SdfSampler<'a> {
                 },
             })
             .collect();
+        let mut leaf_ops = vec![0; plan.leaves.len()];
+        for (i, op) in plan.ops.iter().enumerate() {
+            if let ValueOp::Leaf(l) = op {
+                leaf_ops[*l] = i;
+            }
+        }
         SdfSampler {
             plan,
             grid: *grid,
             coords,
             leaves,
+            leaf_ops,
             pruning,
         }
     }
@@ -289,9 +298,13 @@ struct Scratch {
     row_weights: Vec<Vec<f64>>,
     /// The steps of the tile being decided.
     tile_steps: Vec<Step>,
+    /// Per pointwise or external leaf: its values on the current row, where computed tiles
+    /// need them (one batched evaluation per row).
+    row_values: Vec<Vec<f64>>,
     xs: Vec<f64>,
     ys: Vec<f64>,
     zs: Vec<f64>,
+    values: Vec<f64>,
     mapped: [Vec<f64>; 3],
 }
 
@@ -347,75 +360,110 @@ impl SdfSampler<'_> {
         }
     }
 
-    /// Computes columns `cols` of row `j` of plane `k` into `out`.
-    fn compute(
+    /// Evaluates the pointwise and external leaves on row `j` of plane `k`, in one batch per
+    /// leaf over the columns of the computed tiles that need it, into `scratch.row_values`.
+    fn batch_leaves(
         &self,
         k: usize,
         j: usize,
+        decisions: &[Decision],
+        band_steps: &[Step],
+        scratch: &mut Scratch,
+    ) {
+        let nx = self.grid.counts[0];
+        let ops = self.plan.ops.len();
+        let Scratch {
+            row_values,
+            xs,
+            ys,
+            zs,
+            values,
+            mapped,
+            ..
+        } = scratch;
+        for (l, leaf) in self.leaves.iter().enumerate() {
+            if matches!(leaf, LeafSampler::Separable(_)) {
+                continue;
+            }
+            let needs = |d: &Decision| match *d {
+                Decision::Fill(_) => false,
+                Decision::Compute { steps: None } => true,
+                Decision::Compute { steps: Some(at) } => {
+                    band_steps[at..at + ops][self.leaf_ops[l]] != Step::Skip
+                }
+            };
+            xs.clear();
+            for (tx, d) in decisions.iter().enumerate() {
+                if needs(d) {
+                    xs.extend_from_slice(&self.coords[0][tile(tx, TILE_X, nx)]);
+                }
+            }
+            if xs.is_empty() {
+                continue;
+            }
+            let n = xs.len();
+            ys.clear();
+            ys.resize(n, self.coords[1][j]);
+            zs.clear();
+            zs.resize(n, self.coords[2][k]);
+            values.clear();
+            values.resize(n, 0.0);
+            match leaf {
+                LeafSampler::Pointwise(expr) => expr.eval_points(xs, ys, zs, values),
+                LeafSampler::External { field, map } => {
+                    for (a, m) in mapped.iter_mut().enumerate() {
+                        let row = map.m[a];
+                        m.clear();
+                        m.extend(
+                            (0..n).map(|i| {
+                                row[0] * xs[i] + row[1] * ys[i] + row[2] * zs[i] + map.t[a]
+                            }),
+                        );
+                    }
+                    field.eval_points(&mapped[0], &mapped[1], &mapped[2], values);
+                }
+                LeafSampler::Separable(_) => unreachable!("skipped above"),
+            }
+            let row = &mut row_values[l];
+            row.resize(nx, 0.0);
+            let mut at = 0;
+            for (tx, d) in decisions.iter().enumerate() {
+                if needs(d) {
+                    let cols = tile(tx, TILE_X, nx);
+                    let len = cols.len();
+                    row[cols].copy_from_slice(&values[at..at + len]);
+                    at += len;
+                }
+            }
+        }
+    }
+
+    /// Computes columns `cols` of the current row into `out`.
+    fn compute(
+        &self,
         cols: Range<usize>,
         steps: Option<&[Step]>,
         scratch: &mut Scratch,
         out: &mut [f64],
     ) {
-        let count = cols.len();
         let Scratch {
             stack,
             row_weights,
-            xs,
-            ys,
-            zs,
-            mapped,
+            row_values,
             ..
         } = scratch;
-        xs.clear();
-        let coords = &self.coords;
-        let mut leaf = |l: usize, dst: &mut [f64]| match &self.leaves[l] {
+        let leaf = |l: usize, dst: &mut [f64]| match &self.leaves[l] {
             LeafSampler::Separable(s) => s.fill(&row_weights[l], cols.clone(), dst),
-            LeafSampler::Pointwise(expr) => {
-                points(coords, k, j, &cols, xs, ys, zs);
-                expr.eval_points(xs, ys, zs, dst);
-            }
-            LeafSampler::External { field, map } => {
-                points(coords, k, j, &cols, xs, ys, zs);
-                for (a, m) in mapped.iter_mut().enumerate() {
-                    let row = map.m[a];
-                    m.clear();
-                    m.extend(
-                        (0..count)
-                            .map(|i| row[0] * xs[i] + row[1] * ys[i] + row[2] * zs[i] + map.t[a]),
-                    );
-                }
-                field.eval_points(&mapped[0], &mapped[1], &mapped[2], dst);
-            }
+            _ => dst.copy_from_slice(&row_values[l][cols.clone()]),
         };
         if let [ValueOp::Leaf(l)] = self.plan.ops.as_slice() {
             // A lone leaf writes straight into the output.
             leaf(*l, out);
             return;
         }
-        let values = machine::run(self.plan, steps, count, stack, leaf);
+        let values = machine::run(self.plan, steps, cols.len(), stack, leaf);
         out.copy_from_slice(values);
     }
-}
-
-/// The world coordinates of a row segment, once per segment.
-fn points(
-    coords: &[Vec<f64>; 3],
-    k: usize,
-    j: usize,
-    cols: &Range<usize>,
-    xs: &mut Vec<f64>,
-    ys: &mut Vec<f64>,
-    zs: &mut Vec<f64>,
-) {
-    if !xs.is_empty() {
-        return;
-    }
-    xs.extend_from_slice(&coords[0][cols.clone()]);
-    ys.clear();
-    ys.resize(cols.len(), coords[1][j]);
-    zs.clear();
-    zs.resize(cols.len(), coords[2][k]);
 }
 
 /// Bounds of a caller's field over a world box: by its value at the centre of the mapped box
@@ -467,9 +515,11 @@ impl PlaneSampler for SdfSampler<'_> {
             band_weights: vec![Vec::new(); leaves],
             row_weights: vec![Vec::new(); leaves],
             tile_steps: Vec::with_capacity(ops),
-            xs: Vec::with_capacity(TILE_X),
-            ys: Vec::with_capacity(TILE_X),
-            zs: Vec::with_capacity(TILE_X),
+            row_values: vec![Vec::new(); leaves],
+            xs: Vec::new(),
+            ys: Vec::new(),
+            zs: Vec::new(),
+            values: Vec::new(),
             mapped: Default::default(),
         };
         let z_ranges: Vec<Vec<Interval>> = self
@@ -514,6 +564,7 @@ impl PlaneSampler for SdfSampler<'_> {
                         s.row_weights(j, k, &mut scratch.row_weights[l]);
                     }
                 }
+                self.batch_leaves(k, j, &decisions, &band_steps, &mut scratch);
                 for (tx, decision) in decisions.iter().enumerate() {
                     let cols = tile(tx, TILE_X, nx);
                     match *decision {
@@ -521,7 +572,7 @@ impl PlaneSampler for SdfSampler<'_> {
                         Decision::Compute { steps } => {
                             let steps = steps.map(|at| &band_steps[at..at + ops]);
                             let dst = &mut row[cols.clone()];
-                            self.compute(k, j, cols, steps, &mut scratch, dst);
+                            self.compute(cols, steps, &mut scratch, dst);
                         }
                     }
                 }
