@@ -182,6 +182,10 @@ fn canonical_text_reads_back_and_ignores_spelling() {
     let again = Program::parse_str(&p.canonical()).unwrap();
     assert_eq!(again.canonical(), p.canonical());
     assert_eq!(p.files(), ["my part.stl"]);
+    assert!(
+        p.canonical()
+            .starts_with("expression sin(x)*cos(y) offset 0.125 ")
+    );
     assert_eq!(
         p.canonical_with(&|path| format!("blake3:{}", path.len())),
         p.canonical().replace("\"my part.stl\"", "blake3:11")

@@ -267,3 +267,25 @@ fn sampler_agrees_with_points() {
         }
     }
 }
+
+/// Long programs parse, compile and evaluate without deep recursion.
+#[test]
+fn long_programs() {
+    // 100 001 complements: an odd number negates.
+    let program = format!("ball{}", " complement".repeat(100_001));
+    check(&program, &[([0.0; 3], 1.0)]);
+    // 10 000 small moves add up.
+    let program = format!("ball{}", " move 0.001,0,0".repeat(10_000));
+    let f = field(&program);
+    assert!((f.eval([10.0, 0.0, 0.0]) + 1.0).abs() < 1e-9);
+    // A chain of 2 000 unions.
+    let mut program = String::from("ball");
+    for i in 1..2000 {
+        program.push_str(&format!(" ball move {},0,0 union", 3 * i));
+    }
+    check(
+        &program,
+        &[([3000.0, 0.0, 0.0], -1.0), ([1.5, 0.0, 0.0], 0.5)],
+    );
+    assert_eq!(field(&program).bounds().max, [5998.0, 1.0, 1.0]);
+}

@@ -25,6 +25,21 @@
 //! Numeric arguments are expressions without coordinates (`1/2`, `pi/4`, `2^-3`), vectors are
 //! comma-separated in one word (`0,-2,0`).
 //!
+//! Evaluation: the tree is compiled once (`compile.rs`) into leaves in world coordinates, each
+//! an expression of `crate::expr` with the point transformations substituted (so scaled and
+//! moved TPMS keep their separable per-axis tables), and a post-order list of value operations
+//! run by a stack machine over blocks of points (`machine.rs`). Grids are sampled in tiles
+//! (`sampler.rs`): a tile whose samples provably share one sign is filled without evaluation,
+//! and operands of min/max that cannot win in a tile are skipped, both decided by interval
+//! arithmetic on the samples themselves, so the contoured mesh is the same as without it.
+//!
+//! Why not `fidget` (a crate for exactly this: tapes, interval pruning, a JIT): its current
+//! release needs Rust 1.95 (the workspace promises 1.89), is MPL-2.0 where the project is
+//! MIT/Apache, evaluates in `f32` where the contourer and the TPMS tables work in `f64`, and
+//! brings a JIT and, by default, GPU and GUI crates to a 2-core build. The TPMS fast path it
+//! would replace is the separable table sampler we already have, which no per-point
+//! evaluator, JIT or not, matches.
+//!
 //! Invariants of the module:
 //! - No paths, no IO: `@file` includes go through an [`IncludeResolver`] and `file` words
 //!   through [`ExternalSolids`], both supplied by the caller.

@@ -113,7 +113,8 @@ impl Tree {
     }
 
     /// The program in canonical words: numbers as the shortest text that reads back to the
-    /// same `f64`, TPMS by canonical name, words lower case, one space between words.
+    /// same `f64`, TPMS by canonical name, words lower case, one space between words,
+    /// formulas without whitespace.
     pub fn canonical(&self) -> String {
         self.canonical_with(&|path| path.to_string())
     }
@@ -132,7 +133,12 @@ impl Tree {
                 Op::Cylinder => write!(out, "cylinder"),
                 Op::Box => write!(out, "box"),
                 Op::Tpms(s) => write!(out, "tpms.{}", s.name),
-                Op::Expression { text, .. } => write!(out, "expression {}", quote(text.trim())),
+                // Whitespace never separates two tokens of a valid formula that would otherwise
+                // merge, so dropping it keeps the meaning and normalizes the spelling.
+                Op::Expression { text, .. } => {
+                    let compact: String = text.chars().filter(|c| !c.is_whitespace()).collect();
+                    write!(out, "expression {}", quote(&compact))
+                }
                 Op::File(path) => write!(out, "file {}", quote(&file_key(path))),
                 Op::Complement => write!(out, "complement"),
                 Op::Offset(v) => write!(out, "offset {}", number(*v)),
