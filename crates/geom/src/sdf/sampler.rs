@@ -17,6 +17,11 @@
 //! the mesh is the same with and without it (a test checks this). The proof is sound for any
 //! field, distance or not: it bounds the values that are actually sampled.
 //!
+//! Order of work for a call: per band of tile rows, decide every tile of the band (the
+//! separable leaves' y and z factors are bounded once per band); then per row, evaluate each
+//! pointwise or external leaf in one batch over the columns of the computed tiles that need
+//! it, and run each computed tile's row segment through the stack machine.
+//!
 //! Leaf intervals: a separable leaf (a TPMS, possibly scaled or moved) is bounded from its
 //! per-axis factor tables, by the smallest and largest table entry over the tile's index
 //! range, so the bound is about the very samples; other formulas by interval arithmetic over
@@ -26,7 +31,8 @@
 //! Invariants:
 //! - Every sample is a pure function of its grid indices: tiles are fixed by the grid, sums
 //!   are taken in a fixed order, and a tile's decision depends only on the tile.
-//! - Memory per call is a few tiles of scratch; tables are one row per factor per axis.
+//! - Memory per call is a row of values per pointwise leaf and a block per stack slot; tables
+//!   are one row per factor per axis, made when the sampler is.
 
 use std::ops::Range;
 
