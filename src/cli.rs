@@ -16,6 +16,9 @@ use crate::manifest::{self, Manifest};
 use crate::progress::Bars;
 use crate::report::Report;
 
+#[path = "sdf_command.rs"]
+mod sdf_command;
+
 #[derive(Parser, Debug)]
 #[command(
     name = "latticebuild",
@@ -43,6 +46,32 @@ enum Command {
     Clean(ManifestArgs),
     /// Fit a symmetric cell (from the cache when fresh) and print its coefficients and values
     Cell(CellArgs),
+    /// Contour an SDF program in the Cesogen stack language (`latticebuild sdf ball scale 2`)
+    #[command(
+        long_about = "Contour an SDF program in the Cesogen stack language: a Cesogen \
+                            command line with the program name replaced.\n\n\
+                            Solids: ball, cylinder, box, tpms.NAME, expression FORMULA, file PATH. \
+                            Unary: complement, offset R, shell T, move X,Y,Z, scale K or \
+                            scale KX,KY,KZ, rotate AX,AY,AZ ANGLE, orient AX,AY,AZ. Binary: union, \
+                            intersection, difference. @FILE inserts the words of FILE.\n\n\
+                            Options, anywhere among the words: -s SAMPLES (a total like 100^3, \
+                            or NX,NY,NZ; default 60^3), -b X0,Y0,Z0,X1,Y1,Z1 (default: the \
+                            solid's bounds), -o FILE (default out.ply; .stl .ply .obj .off .vtk), \
+                            -q (no summary)."
+    )]
+    Sdf(SdfArgs),
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct SdfArgs {
+    /// The program's words, with -s, -b, -o and @FILE anywhere among them
+    #[arg(
+        value_name = "WORDS",
+        required = true,
+        trailing_var_arg = true,
+        allow_hyphen_values = true
+    )]
+    pub words: Vec<String>,
 }
 
 #[derive(Args, Debug, Clone)]
@@ -141,6 +170,7 @@ pub fn main() -> ExitCode {
             Ok(()) => ExitCode::SUCCESS,
             Err(f) => f.exit(),
         },
+        Command::Sdf(args) => sdf_command::run(&args.words),
     }
 }
 

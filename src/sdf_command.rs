@@ -1,0 +1,227 @@
+//! `latticebuild sdf WORDS… [-s SAMPLES] [-b x0,y0,z0,x1,y1,z1] [-o out.ply]`: a Cesogen
+//! command line (paper §4.2) with the program name replaced.
+//!
+//! The arguments are read as Cesogen reads them: every `@FILE` is replaced by the
+//! whitespace-separated words of FILE (recursively, names relative to the including file),
+//! then the options are taken out wherever they stand and the remaining words are the
+//! program. `-s` is one total number of samples (spread evenly over the axes: `130^3`) or
+//! three counts; `-b` the box, six numbers; `-o` the output file, `out.ply` by default, its
+//! format chosen by its extension. Without `-b` the box is the solid's bounds, with the paper's
+//! box rule where it is unbounded; without `-s`, 60³ samples.
+//!
+//! Exit codes as for `build`: 0 written, 2 bad arguments or program, 1 nothing could be
+//! written. One summary line on stderr, like the build's.
+//!
+//! Invariant: like the rest of `cli.rs`, this is where files are touched: included files are
+//! read here, and the mesh is written to a temporary file renamed into place.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::time::Instant;
+
+use latticebuild_geom::mesh_io::{self, Encoding, Format};
+use latticebuild_geom::sdf::{
+    self, Aabb, ExternalField, ExternalSolids, IncludeResolver, Included, Program, Word,
+};
+use latticebuild_geom::validate;
+
+use super::Failure;
+use crate::files::write_atomically;
+
+/// The field of the mesh a `file` word names. The mesh reader is not built yet; when it is,
+/// this is the one function to change.
+fn resolve_mesh(_path: &str) -> Result<Arc<dyn ExternalField>, String> {
+    Err("`file` words need mesh support, not built yet".to_string())
+}
+
+struct MeshFiles;
+
+impl ExternalSolids for MeshFiles {
+    fn resolve(&self, path: &str) -> Result<Arc<dyn ExternalField>, String> {
+        resolve_mesh(path)
+    }
+}
+
+/// `@FILE` includes from the filesystem: names relative to the including file's directory
+/// (to the working directory on the command line); identified by canonical path, so a file
+/// reached by two names is still recognised when it includes itself.
+struct FileIncludes;
+
+impl IncludeResolver for FileIncludes {
+    fn read(&self, name: &str, from: Option<&str>) -> Result<Included, String> {
+        let path = match from.and_then(|f| Path::new(f).parent()) {
+            Some(dir) => dir.join(name),
+            None => PathBuf::from(name),
+        };
+        let canonical = path
+            .canonicalize()
+            .map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
+        let text = std::fs::read_to_string(&canonical)
+            .map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
+        Ok(Included {
+            id: canonical.display().to_string(),
+            text,
+        })
+    }
+}
+
+/// The options of a command line and the words of its program.
+struct Options {
+    samples: [usize; 3],
+    domain: Option<Aabb>,
+    output: PathBuf,
+    quiet: bool,
+    words: Vec<Word>,
+}
+
+fn usage(text: impl std::fmt::Display) -> Failure {
+    Failure::Usage(format!("error: {text}\n"))
+}
+
+impl Options {
+    fn extract(words: Vec<Word>) -> Result<Options, Failure> {
+        let mut options = Options {
+            samples: sdf::DEFAULT_SAMPLES,
+            domain: None,
+            output: PathBuf::from("out.ply"),
+            quiet: false,
+            words: Vec::new(),
+        };
+        let mut it = words.into_iter();
+        while let Some(word) = it.next() {
+            let (flag, inline) = match word.text.split_once('=') {
+                Some((f, v)) if f.starts_with("--") => (f.to_string(), Some(v.to_string())),
+                _ => (word.text.clone(), None),
+            };
+            let name = match flag.as_str() {
+                "-s" | "--samples" => "-s",
+                "-b" | "--bounds" => "-b",
+                "-o" | "--output" => "-o",
+                "-q" | "--quiet" => {
+                    options.quiet = true;
+                    continue;
+                }
+                _ => {
+                    options.words.push(word);
+                    continue;
+                }
+            };
+            let value = match inline.or_else(|| it.next().map(|w| w.text)) {
+                Some(v) => v,
+                None => {
+                    return Err(usage(format_args!(
+                        "{} `{flag}` needs a value after it ({})",
+                        word.origin,
+                        example(name)
+                    )));
+                }
+            };
+            let bad = |e: sdf::OptionError| usage(format_args!("{} `{flag}`: {e}", word.origin));
+            match name {
+                "-s" => options.samples = sdf::parse_samples(&value).map_err(bad)?,
+                "-b" => options.domain = Some(sdf::parse_box(&value).map_err(bad)?),
+                _ => options.output = PathBuf::from(value),
+            }
+        }
+        Ok(options)
+    }
+}
+
+fn example(flag: &str) -> &'static str {
+    match flag {
+        "-s" => "a total like `100^3` or three counts like `100,50,50`",
+        "-b" => "six numbers `x0,y0,z0,x1,y1,z1`",
+        _ => "a file name like `out.stl`",
+    }
+}
+
+/// Runs `latticebuild sdf` with its raw arguments.
+pub fn run(args: &[String]) -> ExitCode {
+    // clap sees `-h` only in first place, since the words may start with a hyphen.
+    if args.iter().any(|a| a == "-h" || a == "--help") {
+        use clap::CommandFactory;
+        let mut cli = super::Cli::command();
+        if let Some(sdf) = cli.find_subcommand_mut("sdf") {
+            let _ = sdf.print_long_help();
+        }
+        return ExitCode::SUCCESS;
+    }
+    match command(args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(f) => f.exit(),
+    }
+}
+
+fn command(args: &[String]) -> Result<(), Failure> {
+    let started = Instant::now();
+    let words = sdf::expand(args, &FileIncludes).map_err(usage)?;
+    let options = Options::extract(words)?;
+    let format = output_format(&options.output)?;
+    let program = Program::parse(&options.words).map_err(usage)?;
+    let field = program.field(&MeshFiles).map_err(usage)?;
+    let domain = options.domain.unwrap_or_else(|| field.domain());
+    let mesh =
+        sdf::mesh(&field, &domain, options.samples).map_err(|e| Failure::Build(e.to_string()))?;
+    let shown = options.output.display();
+    if mesh.is_empty() {
+        return Err(Failure::Build(format!(
+            "the solid has no surface in the box {}: `{shown}` was not written",
+            box_text(&domain)
+        )));
+    }
+    write_atomically(&options.output, &mut |w| {
+        mesh_io::write_mesh(&mesh, format, Encoding::Binary, w)
+    })
+    .map_err(|e| Failure::Build(format!("cannot write `{shown}`: {e}")))?;
+    let check = validate::check(&mesh);
+    if !options.quiet {
+        let validity = match (check.watertight, check.manifold) {
+            (true, true) => "watertight, manifold".to_string(),
+            (w, m) => format!(
+                "{}, {}",
+                if w { "watertight" } else { "NOT watertight" },
+                if m { "manifold" } else { "NOT manifold" }
+            ),
+        };
+        let [nx, ny, nz] = options.samples;
+        eprintln!(
+            "{shown}: {} triangles, {} vertices, {validity}, volume {:.6}, volume fraction {:.4} \
+             of {} at {nx}×{ny}×{nz} samples ({:.2} s)",
+            check.triangles,
+            check.vertices,
+            check.volume,
+            check.volume / domain.volume(),
+            box_text(&domain),
+            started.elapsed().as_secs_f64()
+        );
+    }
+    if !(check.watertight && check.manifold) {
+        return Err(Failure::Build(format!(
+            "`{shown}` is not a closed manifold mesh; this is a bug, please report the command"
+        )));
+    }
+    Ok(())
+}
+
+fn output_format(path: &Path) -> Result<Format, Failure> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_lowercase())
+        .unwrap_or_default();
+    Format::from_name(&ext).ok_or_else(|| {
+        usage(format_args!(
+            "cannot tell the mesh format of `{}` from its extension; use .stl, .ply, .obj, \
+             .off or .vtk",
+            path.display()
+        ))
+    })
+}
+
+/// `[x0,x1]×[y0,y1]×[z0,z1]`
+fn box_text(b: &Aabb) -> String {
+    (0..3)
+        .map(|a| format!("[{},{}]", b.min[a], b.max[a]))
+        .collect::<Vec<_>>()
+        .join("×")
+}

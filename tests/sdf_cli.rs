@@ -1,0 +1,217 @@
+//! `latticebuild sdf` end to end: Cesogen command lines with the program name replaced, the
+//! written files, `@file` includes, and the errors a user sees.
+
+mod common;
+
+use std::f64::consts::PI;
+use std::path::Path;
+use std::process::{Command, Output};
+
+use common::BIN;
+
+fn sdf(dir: &Path, args: &[&str]) -> Output {
+    Command::new(BIN)
+        .arg("sdf")
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run latticebuild")
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// The numbers of the summary line: triangles, vertices and volume.
+fn summary(out: &Output) -> (u64, u64, f64) {
+    let text = stderr(out);
+    assert!(out.status.success(), "failed: {}\n{text}", out.status);
+    assert!(text.contains("watertight, manifold"), "{text}");
+    let number_before = |label: &str| -> f64 {
+        let at = text
+            .find(label)
+            .unwrap_or_else(|| panic!("no `{label}` in {text}"));
+        let start = text[..at].trim_end().rfind([' ', ':']).map_or(0, |i| i + 1);
+        text[start..at].trim().parse().expect(label)
+    };
+    let volume_at = text.find("volume ").expect("volume") + "volume ".len();
+    let volume_end = text[volume_at..].find(',').expect("comma") + volume_at;
+    (
+        number_before(" triangles") as u64,
+        number_before(" vertices") as u64,
+        text[volume_at..volume_end].parse().expect("volume"),
+    )
+}
+
+/// The `element NAME COUNT` of a PLY header.
+fn ply_count(path: &Path, element: &str) -> u64 {
+    let bytes = std::fs::read(path).expect("read ply");
+    let end = bytes
+        .windows(10)
+        .position(|w| w == b"end_header")
+        .expect("header");
+    let header = String::from_utf8_lossy(&bytes[..end]).into_owned();
+    header
+        .lines()
+        .find_map(|l| l.strip_prefix(&format!("element {element} ")))
+        .expect("element line")
+        .trim()
+        .parse()
+        .expect("count")
+}
+
+#[test]
+fn figure_6_writes_out_ply_by_default() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = sdf(
+        dir.path(),
+        &[
+            "-b",
+            "-4,-4,-4,4,4,4",
+            "-s",
+            "130^3",
+            "ball",
+            "scale",
+            "5",
+            "tpms.p",
+            "scale",
+            "4",
+            "tpms.d",
+            "scale",
+            "3.75",
+            "tpms.gyroid",
+            "scale",
+            "1.25",
+            "intersection",
+            "intersection",
+            "intersection",
+        ],
+    );
+    let (triangles, vertices, volume) = summary(&out);
+    let ply = dir.path().join("out.ply");
+    assert_eq!(ply_count(&ply, "face"), triangles);
+    assert_eq!(ply_count(&ply, "vertex"), vertices);
+    // Converges to about 55.9 (the share of points inside); 130³ marching cubes is ~2% low.
+    assert!((volume - 55.9).abs() < 0.03 * 55.9, "{volume}");
+    assert!(stderr(&out).contains("of [-4,4]×[-4,4]×[-4,4] at 130×130×130 samples"));
+}
+
+#[test]
+fn the_hourglass_to_stl_with_options_after_the_words() {
+    let dir = tempfile::tempdir().unwrap();
+    let words = "cylinder move 0,-2,0 cylinder move 0,2,0 union scale 1/2 orient 1,0,0 \
+                 complement box intersection";
+    let mut args: Vec<&str> = words.split_whitespace().collect();
+    args.extend(["-o", "hourglass.STL", "-s", "40^3"]);
+    let out = sdf(dir.path(), &args);
+    let (triangles, _, volume) = summary(&out);
+    let stl = std::fs::metadata(dir.path().join("hourglass.STL")).unwrap();
+    // Binary STL: an 80-byte header, a count, 50 bytes per triangle.
+    assert_eq!(stl.len(), 84 + 50 * triangles);
+    assert!((volume - (8.0 - PI / 2.0)).abs() < 0.01 * 8.0, "{volume}");
+    assert!(!dir.path().join("out.ply").exists());
+}
+
+#[test]
+fn includes_nest_relative_to_their_file_and_may_hold_options() {
+    let dir = tempfile::tempdir().unwrap();
+    let sub = dir.path().join("parts");
+    std::fs::create_dir(&sub).unwrap();
+    // A cylinder of radius 1/2 along x, named once and used twice.
+    std::fs::write(sub.join("rod.txt"), "cylinder orient 1,0,0\n  scale 1/2\n").unwrap();
+    std::fs::write(
+        sub.join("pair.txt"),
+        "@rod.txt move 0,-2,0\n@rod.txt move 0,2,0\nunion\n-s 80^3",
+    )
+    .unwrap();
+    let out = sdf(dir.path(), &["@parts/pair.txt", "-o", "pair.obj"]);
+    let (_, _, volume) = summary(&out);
+    // Two cylinders of radius 1/2 and length 2 (the box rule cuts them to [-1, 1]).
+    assert!((volume - PI).abs() < 0.02 * PI, "{volume}");
+    assert!(stderr(&out).contains("at 80×80×80 samples"));
+    assert!(dir.path().join("pair.obj").exists());
+}
+
+#[test]
+fn a_file_that_includes_itself_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("a.txt"), "ball @b.txt").unwrap();
+    std::fs::write(dir.path().join("b.txt"), "@./a.txt union").unwrap();
+    let out = sdf(dir.path(), &["@a.txt"]);
+    assert_eq!(out.status.code(), Some(2));
+    let text = stderr(&out);
+    let a = dir.path().join("a.txt").canonicalize().unwrap();
+    let b = dir.path().join("b.txt").canonicalize().unwrap();
+    assert_eq!(
+        text,
+        format!(
+            "error: word 1 of `{b}` `@./a.txt`: the file includes itself: {a} → {b} → {a}\n",
+            a = a.display(),
+            b = b.display()
+        )
+    );
+    std::fs::write(dir.path().join("self.txt"), "ball @self.txt").unwrap();
+    let out = sdf(dir.path(), &["@self.txt"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("the file includes itself"));
+}
+
+#[test]
+fn bad_input_exits_2_with_the_word_at_fault() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&[&str], &str); 6] = [
+        (
+            &["bal"],
+            "error: word 1 `bal`: unknown word; did you mean `ball`?\n",
+        ),
+        (
+            &["-s", "60^3", "ball", "intersection"],
+            "error: word 4 `intersection`: intersection needs two solids, found one\n",
+        ),
+        (
+            &["ball", "-s", "10.5"],
+            "error: word 2 `-s`: `10.5` is not a whole number of samples\n",
+        ),
+        (
+            &["ball", "-b", "1,1,1,0,0,0"],
+            "error: word 2 `-b`: `1,1,1,0,0,0`: the lower corner must be below the upper one on \
+             every axis\n",
+        ),
+        (
+            &["ball", "@missing.txt"],
+            "error: word 2 `@missing.txt`: cannot include it: cannot read `missing.txt`: No such \
+             file or directory (os error 2)\n",
+        ),
+        (
+            &[
+                "tpms.neovius",
+                "scale",
+                "0.065",
+                "file",
+                "part.stl",
+                "intersection",
+            ],
+            "error: word 4 `file`: `file` cannot be used: `file` words need mesh support, not \
+             built yet\n",
+        ),
+    ];
+    for (args, want) in cases {
+        let out = sdf(dir.path(), args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert_eq!(stderr(&out), want, "{args:?}");
+    }
+    assert!(!dir.path().join("out.ply").exists());
+}
+
+#[test]
+fn an_empty_solid_exits_1_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = sdf(dir.path(), &["ball", "offset", "-2"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(
+        stderr(&out),
+        "error: the solid has no surface in the box [-1,1]×[-1,1]×[-1,1]: `out.ply` was not \
+         written\n"
+    );
+    assert!(!dir.path().join("out.ply").exists());
+}
