@@ -21,6 +21,8 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use latticebuild_geom::mesh_io::{self, Encoding, Format};
+use latticebuild_geom::mesh_read;
+use latticebuild_geom::mesh_sdf::{MeshSdf, SdfOptions};
 use latticebuild_geom::sdf::{
     self, Aabb, ExternalField, ExternalSolids, IncludeResolver, Included, Program, Word,
 };
@@ -29,10 +31,15 @@ use latticebuild_geom::validate;
 use super::Failure;
 use crate::files::write_atomically;
 
-/// The field of the mesh a `file` word names. The mesh reader is not built yet; when it is,
-/// this is the one function to change.
-fn resolve_mesh(_path: &str) -> Result<Arc<dyn ExternalField>, String> {
-    Err("`file` words need mesh support, not built yet".to_string())
+/// The field of the mesh a `file` word names: its signed distance (the format by content,
+/// or by extension when the content does not tell).
+fn resolve_mesh(path: &str) -> Result<Arc<dyn ExternalField>, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read `{path}`: {e}"))?;
+    let extension = Path::new(path).extension().and_then(|e| e.to_str());
+    let soup = mesh_read::read_auto(&bytes, extension)
+        .map_err(|e| format!("cannot read `{path}`: {e}"))?;
+    let sdf = MeshSdf::new(&soup, SdfOptions::default()).map_err(|e| format!("`{path}`: {e}"))?;
+    Ok(Arc::new(sdf))
 }
 
 struct MeshFiles;

@@ -38,10 +38,11 @@ fn format_of(given: &str) -> Result<Format, String> {
         .ok_or_else(|| format!("`{given}` has no mesh file extension"))
 }
 
-/// Reads the soup of a mesh file's bytes; errors name the file.
+/// Reads the soup of a mesh file's bytes, in the format its content shows (its extension
+/// when the content does not tell); errors name the file.
 pub fn read_soup(given: &str, bytes: &[u8]) -> Result<TriangleSoup, String> {
-    let format = format_of(given)?;
-    mesh_read::read(bytes, format).map_err(|e| format!("cannot read `{given}`: {e}"))
+    let extension = format_of(given)?.extension();
+    mesh_read::read_auto(bytes, Some(extension)).map_err(|e| format!("cannot read `{given}`: {e}"))
 }
 
 /// `cell` of a mesh cell: the soup in the cell's reference frame, with its sampling mode.

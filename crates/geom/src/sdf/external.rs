@@ -14,6 +14,7 @@ use std::sync::Arc;
 
 use super::bounds::Aabb;
 use crate::field::ScalarField;
+use crate::mesh_sdf::{MeshSdf, Mode};
 
 /// The field of a `file` solid, negative inside, in the file's own coordinates.
 pub trait ExternalField: ScalarField {
@@ -38,5 +39,19 @@ pub struct NoExternalSolids;
 impl ExternalSolids for NoExternalSolids {
     fn resolve(&self, _path: &str) -> Result<Arc<dyn ExternalField>, String> {
         Err("meshes are not available here".to_string())
+    }
+}
+
+/// A mesh's signed distance is a `file` solid: its bounds are the triangles' box, and it is a
+/// true distance unless it samples containment only or clamps distances to a band.
+impl ExternalField for MeshSdf {
+    fn bounds(&self) -> Aabb {
+        let (min, max) = MeshSdf::bounds(self);
+        Aabb { min, max }
+    }
+
+    fn is_distance(&self) -> bool {
+        let options = self.options();
+        options.mode == Mode::SignedDistance && options.band.is_none()
     }
 }
