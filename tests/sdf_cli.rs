@@ -216,61 +216,10 @@ fn an_empty_solid_exits_1_and_writes_nothing() {
     assert!(!dir.path().join("out.ply").exists());
 }
 
-/// An ASCII STL of the sphere of radius `r` at the origin (closed: exact poles and seam), and
-/// its enclosed volume.
-fn sphere_stl(r: f64, rings: usize, segments: usize) -> (String, f64) {
-    use std::f64::consts::PI;
-    let point = |i: usize, j: usize| -> [f64; 3] {
-        let phi = 2.0 * PI * (j % segments) as f64 / segments as f64;
-        match i {
-            0 => [0.0, 0.0, r],
-            _ if i == rings => [0.0, 0.0, -r],
-            _ => {
-                let theta = PI * i as f64 / rings as f64;
-                [
-                    r * theta.sin() * phi.cos(),
-                    r * theta.sin() * phi.sin(),
-                    r * theta.cos(),
-                ]
-            }
-        }
-    };
-    let (mut text, mut volume) = (String::from("solid s\n"), 0.0);
-    for i in 0..rings {
-        for j in 0..segments {
-            let (a, b, c, d) = (
-                point(i, j),
-                point(i, j + 1),
-                point(i + 1, j),
-                point(i + 1, j + 1),
-            );
-            let mut tris = Vec::new();
-            if i > 0 {
-                tris.push([a, c, b]);
-            }
-            if i + 1 < rings {
-                tris.push([b, c, d]);
-            }
-            for [p, q, w] in tris {
-                volume += (p[0] * (q[1] * w[2] - q[2] * w[1]) - p[1] * (q[0] * w[2] - q[2] * w[0])
-                    + p[2] * (q[0] * w[1] - q[1] * w[0]))
-                    / 6.0;
-                text.push_str("facet normal 0 0 0\nouter loop\n");
-                for v in [p, q, w] {
-                    text.push_str(&format!("vertex {} {} {}\n", v[0], v[1], v[2]));
-                }
-                text.push_str("endloop\nendfacet\n");
-            }
-        }
-    }
-    text.push_str("endsolid s\n");
-    (text, volume)
-}
-
 #[test]
 fn a_mesh_filled_with_a_gyroid_by_a_file_word() {
     let dir = tempfile::tempdir().unwrap();
-    let (stl, sphere) = sphere_stl(10.0, 32, 64);
+    let (stl, sphere) = common::sphere_stl(10.0, [0.0; 3], 32, 64);
     std::fs::write(dir.path().join("part.stl"), stl).unwrap();
     let out = sdf(
         dir.path(),

@@ -86,3 +86,59 @@ pub fn copy_dir(from: &Path, to: &Path, skip: &[&str]) {
         }
     }
 }
+
+/// A UV sphere of `radius` around `centre`: `(ASCII STL, enclosed volume)`, triangles
+/// counter-clockwise seen from outside.
+pub fn sphere_stl(radius: f64, centre: [f64; 3], rings: usize, segments: usize) -> (String, f64) {
+    // Poles and the seam are exact, so the surface is closed (shared corners are equal).
+    let point = |i: usize, j: usize| -> [f64; 3] {
+        let theta = std::f64::consts::PI * i as f64 / rings as f64;
+        let phi = 2.0 * std::f64::consts::PI * (j % segments) as f64 / segments as f64;
+        let ring = if i == 0 || i == rings {
+            0.0
+        } else {
+            radius * theta.sin()
+        };
+        let z = match i {
+            0 => radius,
+            _ if i == rings => -radius,
+            _ => radius * theta.cos(),
+        };
+        [
+            centre[0] + ring * phi.cos(),
+            centre[1] + ring * phi.sin(),
+            centre[2] + z,
+        ]
+    };
+    let mut triangles = Vec::new();
+    for i in 0..rings {
+        for j in 0..segments {
+            let (a, b) = (point(i, j), point(i, j + 1));
+            let (c, d) = (point(i + 1, j), point(i + 1, j + 1));
+            // Rows go from the north pole down: (a, c, d) and (a, d, b) face outward.
+            if i > 0 {
+                triangles.push([a, c, b]);
+            }
+            if i + 1 < rings {
+                triangles.push([b, c, d]);
+            }
+        }
+    }
+    let mut text = String::from("solid sphere\n");
+    let mut volume = 0.0;
+    for [p, q, r] in &triangles {
+        let rel = |v: &[f64; 3]| [v[0] - centre[0], v[1] - centre[1], v[2] - centre[2]];
+        let (p0, q0, r0) = (rel(p), rel(q), rel(r));
+        volume += (p0[0] * (q0[1] * r0[2] - q0[2] * r0[1])
+            - p0[1] * (q0[0] * r0[2] - q0[2] * r0[0])
+            + p0[2] * (q0[0] * r0[1] - q0[1] * r0[0]))
+            / 6.0;
+        text.push_str(" facet normal 0 0 0\n  outer loop\n");
+        for v in [p, q, r] {
+            text.push_str(&format!("   vertex {} {} {}\n", v[0], v[1], v[2]));
+        }
+        text.push_str("  endloop\n endfacet\n");
+    }
+    text.push_str("endsolid sphere\n");
+    (text, volume)
+}

@@ -1,13 +1,13 @@
 //! Every kind of bad program gives an error naming the word at fault, with the exact text a
 //! user reads; and the canonical form reads back to itself.
 
-use std::collections::HashMap;
-use std::sync::Arc;
+mod common;
 
-use latticebuild_geom::field::ScalarField;
+use common::sdf_sphere::SphereFile;
+use std::collections::HashMap;
+
 use latticebuild_geom::sdf::{
-    Aabb, ExternalField, ExternalSolids, IncludeResolver, Included, NoExternalSolids, Program,
-    SdfError, expand,
+    IncludeResolver, Included, NoExternalSolids, Program, SdfError, expand,
 };
 
 fn error(program: &str) -> String {
@@ -192,41 +192,16 @@ fn canonical_text_reads_back_and_ignores_spelling() {
     );
 }
 
-/// A sphere standing in for a mesh.
-struct Sphere;
-
-impl ScalarField for Sphere {
-    fn eval_points(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
-        for i in 0..out.len() {
-            out[i] = (xs[i] * xs[i] + ys[i] * ys[i] + zs[i] * zs[i]).sqrt() - 1.0;
-        }
-    }
-}
-
-impl ExternalField for Sphere {
-    fn bounds(&self) -> Aabb {
-        Aabb::cube(1.0)
-    }
-    fn is_distance(&self) -> bool {
-        true
-    }
-}
-
-struct OnlySphere;
-
-impl ExternalSolids for OnlySphere {
-    fn resolve(&self, path: &str) -> Result<Arc<dyn ExternalField>, String> {
-        match path {
-            "sphere.stl" => Ok(Arc::new(Sphere)),
-            _ => Err(format!("cannot read `{path}`")),
-        }
-    }
-}
+/// A unit sphere for `sphere.stl`; other files cannot be read.
+const ONLY_SPHERE: SphereFile = SphereFile {
+    name: Some("sphere.stl"),
+    radius: 1.0,
+};
 
 #[test]
 fn file_words_are_resolved_by_the_caller() {
     let p = Program::parse_str("tpms.p file sphere.stl intersection file other.stl union").unwrap();
-    let err = p.field(&OnlySphere).err().expect("other.stl is unknown");
+    let err = p.field(&ONLY_SPHERE).err().expect("other.stl is unknown");
     assert_eq!(
         err.to_string(),
         "word 5 `file`: `file` cannot be used: cannot read `other.stl`"
@@ -243,7 +218,7 @@ fn file_words_are_resolved_by_the_caller() {
     );
     let f = Program::parse_str("file sphere.stl scale 2 move 1,0,0")
         .unwrap()
-        .field(&OnlySphere)
+        .field(&ONLY_SPHERE)
         .unwrap();
     assert!((f.eval([3.0, 0.0, 0.0])).abs() < 1e-12);
     assert!((f.eval([1.0, 0.0, 0.0]) + 2.0).abs() < 1e-12);

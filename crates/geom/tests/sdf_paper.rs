@@ -3,46 +3,21 @@
 //! centres inside the solid by point evaluation (no contouring), or complementary solids that
 //! must add up to the box.
 
+mod common;
+
+use common::sdf_sphere::SphereFile;
 use std::f64::consts::PI;
-use std::sync::Arc;
 
 use latticebuild_geom::field::ScalarField;
 use latticebuild_geom::mesh::Mesh;
-use latticebuild_geom::sdf::{
-    self, Aabb, ExternalField, ExternalSolids, Program, SdfField, parse_box, parse_samples,
-};
+use latticebuild_geom::sdf::{self, Aabb, Program, SdfField, parse_box, parse_samples};
 use latticebuild_geom::validate::{MeshCheck, check};
 
-/// An analytic unit sphere standing in for a mesh file.
-struct Sphere;
-
-impl ScalarField for Sphere {
-    fn eval_points(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
-        for i in 0..out.len() {
-            out[i] = (xs[i] * xs[i] + ys[i] * ys[i] + zs[i] * zs[i]).sqrt() - 1.0;
-        }
-    }
-}
-
-impl ExternalField for Sphere {
-    fn bounds(&self) -> Aabb {
-        Aabb::cube(1.0)
-    }
-    fn is_distance(&self) -> bool {
-        true
-    }
-}
-
-struct Files;
-
-impl ExternalSolids for Files {
-    fn resolve(&self, path: &str) -> Result<Arc<dyn ExternalField>, String> {
-        match path {
-            "part.stl" => Ok(Arc::new(Sphere)),
-            _ => Err(format!("no mesh `{path}`")),
-        }
-    }
-}
+/// An analytic unit sphere standing in for the mesh file `part.stl`.
+const FILES: SphereFile = SphereFile {
+    name: Some("part.stl"),
+    radius: 1.0,
+};
 
 struct Run {
     field: SdfField,
@@ -70,7 +45,7 @@ fn run(command: &str) -> Run {
         }
         i += 2;
     }
-    let field = Program::parse_args(&words).unwrap().field(&Files).unwrap();
+    let field = Program::parse_args(&words).unwrap().field(&FILES).unwrap();
     let domain = domain.unwrap_or_else(|| field.domain());
     let mesh = sdf::mesh(&field, &domain, samples).unwrap();
     let check = check(&mesh);

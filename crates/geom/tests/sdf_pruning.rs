@@ -1,41 +1,21 @@
 //! Skipping tiles by interval bounds is invisible in the output: meshes with and without it
 //! are identical, and samples are pure functions of their grid indices.
 
-use std::sync::Arc;
+mod common;
+
+use common::sdf_sphere::SphereFile;
 
 use latticebuild_geom::field::{Grid, ScalarField};
-use latticebuild_geom::sdf::{self, Aabb, ExternalField, ExternalSolids, Program, SdfField};
+use latticebuild_geom::sdf::{self, Program, SdfField};
 
-/// A sphere of radius 1.5 standing in for a mesh, a true distance.
-struct Sphere;
-
-impl ScalarField for Sphere {
-    fn eval_points(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
-        for i in 0..out.len() {
-            out[i] = (xs[i] * xs[i] + ys[i] * ys[i] + zs[i] * zs[i]).sqrt() - 1.5;
-        }
-    }
-}
-
-impl ExternalField for Sphere {
-    fn bounds(&self) -> Aabb {
-        Aabb::cube(1.5)
-    }
-    fn is_distance(&self) -> bool {
-        true
-    }
-}
-
-struct Files;
-
-impl ExternalSolids for Files {
-    fn resolve(&self, _path: &str) -> Result<Arc<dyn ExternalField>, String> {
-        Ok(Arc::new(Sphere))
-    }
-}
+/// A sphere of radius 1.5 standing in for every mesh, a true distance.
+const FILES: SphereFile = SphereFile {
+    name: None,
+    radius: 1.5,
+};
 
 fn field(program: &str, pruning: bool) -> SdfField {
-    let mut f = Program::parse_str(program).unwrap().field(&Files).unwrap();
+    let mut f = Program::parse_str(program).unwrap().field(&FILES).unwrap();
     f.set_pruning(pruning);
     f
 }

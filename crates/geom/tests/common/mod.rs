@@ -35,3 +35,4 @@ pub fn torus(n: u32, m: u32, big_r: f64, r: f64, offset: [f64; 3]) -> Mesh {
     }
 }
 pub mod mesh_gen;
+pub mod sdf_sphere;
