@@ -7,17 +7,8 @@ mod common;
 use common::{Project, ran, sphere_stl};
 use std::f64::consts::PI;
 
-fn number(report: &serde_json::Value, key: &str) -> f64 {
-    report[key]
-        .as_f64()
-        .unwrap_or_else(|| panic!("{key} in {report}"))
-}
-
-#[test]
-fn a_sphere_filled_with_a_gyroid_keeps_the_gyroids_volume_fraction() {
-    let (stl, sphere_volume) = sphere_stl(10.0, [0.0; 3], 48, 96);
-    let p = Project::new(
-        r#"
+/// A gyroid in a sphere of radius 10 (`ball.stl`), over the sphere's box.
+const BALL: &str = r#"
 [cells.g]
 tpms = "gyroid"
 
@@ -28,8 +19,18 @@ domain = { min = [-10.5, -10.5, -10.5], max = [10.5, 10.5, 10.5] }
 cell_size = 4
 samples = 128
 formats = ["ply"]
-"#,
-    );
+"#;
+
+fn number(report: &serde_json::Value, key: &str) -> f64 {
+    report[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{key} in {report}"))
+}
+
+#[test]
+fn a_sphere_filled_with_a_gyroid_keeps_the_gyroids_volume_fraction() {
+    let (stl, sphere_volume) = sphere_stl(10.0, [0.0; 3], 48, 96);
+    let p = Project::new(BALL);
     p.write("ball.stl", &stl);
     let reports = p.build(&[]);
     let r = &reports[0];
@@ -49,22 +50,9 @@ formats = ["ply"]
 #[test]
 fn a_skin_closes_the_part_and_adds_its_shell() {
     let (stl, sphere_volume) = sphere_stl(10.0, [0.0; 3], 48, 96);
-    let p = Project::new(
-        r#"
-[cells.g]
-tpms = "gyroid"
-
-[outputs.ball]
-cell = "g"
-within = "ball.stl"
-skin = 1.0
-domain = { min = [-10.5, -10.5, -10.5], max = [10.5, 10.5, 10.5] }
-cell_size = 4
-samples = 128
-"#,
-    );
+    let p = Project::new(BALL);
     p.write("ball.stl", &stl);
-    let r = &p.build(&[])[0];
+    let r = &p.build(&["--set", "outputs.ball.skin=1.0"])[0];
     assert_eq!(r["watertight"], true, "{r}");
     assert_eq!(r["manifold"], true, "{r}");
     // The skin (radii 9 to 10) is solid, and the gyroid fills half of the ball inside it.
