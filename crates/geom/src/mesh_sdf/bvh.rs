@@ -12,6 +12,12 @@
 //! exact. Below depth [`MEDIAN_DEPTH`] a split falls back to the median, which bounds the depth
 //! by `MEDIAN_DEPTH + log2 n` ([`MAX_DEPTH`]), so traversal stacks can be fixed arrays.
 //!
+//! Bounds: every node has an axis-aligned box, and nodes of at most [`OBB_MAX`] triangles an
+//! oriented box along their mean normal ([`fit_oriented`] says why). A node's distance bound
+//! is its oriented box's when it has one (much the tighter on smooth patches; taking the max
+//! with the aligned box cost more in arithmetic than it saved in pruning), its aligned box's
+//! otherwise. Both are stored in `f32` rounded outward, so they still contain their triangles.
+//!
 //! Subtrees above [`PARALLEL`] triangles are built on rayon in parallel, each into its own
 //! node list, and the lists are stitched in preorder once at the end. The result is the same
 //! whatever the thread count.
@@ -28,18 +34,22 @@ const MEDIAN_DEPTH: usize = 48;
 /// Deepest possible node (root at 0): median splits halve, and counts fit in 32 bits.
 pub(super) const MAX_DEPTH: usize = MEDIAN_DEPTH + 33;
 
+/// One node, 96 bytes: its boxes are stored in `f32`, rounded outward, so that a node fits
+/// in one and a half cache lines (queries are bound by memory traffic, not arithmetic).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Node {
-    pub lo: V3,
-    pub hi: V3,
+    lo: [f32; 3],
+    hi: [f32; 3],
     /// Leaf: its first triangle; interior: its second child.
     pub first: u32,
     /// Leaf: its number of triangles (at least 1); interior: 0.
     pub count: u32,
-    /// An oriented box around the triangles: `extent[a][0] ≤ frame[a]·x ≤ extent[a][1]`, the
-    /// frame orthonormal with `frame[2]` along the mean normal (infinite extents when unknown).
-    pub frame: [V3; 3],
-    pub extent: [[f64; 2]; 3],
+    /// An oriented box around the triangles: `extent[a][0] ≤ frame[a]·x ≤ extent[a][1]`
+    /// (computed in `f64` with the stored `f32` axes), `frame` orthonormal to `f32` precision
+    /// with `frame[2]` along the mean normal; infinite extents when there is none.
+    frame: [[f32; 3]; 3],
+    extent: [[f32; 2]; 3],
+    _pad: [u32; 1],
 }
 
 impl Default for Node {
@@ -50,9 +60,24 @@ impl Default for Node {
             first: 0,
             count: 0,
             frame: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-            extent: [[f64::NEG_INFINITY, f64::INFINITY]; 3],
+            extent: [[f32::NEG_INFINITY, f32::INFINITY]; 3],
+            _pad: [0],
         }
     }
+}
+
+/// `x` as `f32`, rounded toward −∞ (`down`) or +∞, so a box stays around its contents.
+fn round_f32(x: f64, down: bool) -> f32 {
+    let r = x as f32;
+    match (down, f64::from(r).partial_cmp(&x)) {
+        (true, Some(std::cmp::Ordering::Greater)) => r.next_down(),
+        (false, Some(std::cmp::Ordering::Less)) => r.next_up(),
+        _ => r,
+    }
+}
+
+fn widen(v: [f32; 3]) -> V3 {
+    v.map(f64::from)
 }
 
 impl Node {
@@ -61,23 +86,41 @@ impl Node {
         self.count > 0
     }
 
-    /// A lower bound on the squared distance from `p` to the node's triangles: they lie in
-    /// both its boxes.
+    pub(super) fn lo(&self) -> V3 {
+        widen(self.lo)
+    }
+
+    pub(super) fn hi(&self) -> V3 {
+        widen(self.hi)
+    }
+
+    fn set_box(&mut self, lo: V3, hi: V3) {
+        self.lo = lo.map(|c| round_f32(c, true));
+        self.hi = hi.map(|c| round_f32(c, false));
+    }
+
+    /// A lower bound on the squared distance from `p` to the node's triangles, from its
+    /// oriented box when it has one, else its aligned box. The oriented bound is shrunk by
+    /// 1e-6 because its `f32` axes are orthonormal only to about 1e-7.
     #[inline]
     pub(super) fn dist2(&self, p: V3) -> f64 {
-        let aligned = box_dist2(p, self.lo, self.hi);
+        if self.extent[0][0] == f32::NEG_INFINITY {
+            return box_dist2(p, self.lo(), self.hi());
+        }
         let mut oriented = 0.0;
         for (axis, [lo, hi]) in self.frame.iter().zip(self.extent) {
-            let s = dot(*axis, p);
-            let d = (lo - s).max(s - hi).max(0.0);
+            let s = dot(widen(*axis), p);
+            let d = (f64::from(lo) - s).max(s - f64::from(hi)).max(0.0);
             oriented += d * d;
         }
-        aligned.max(oriented)
+        oriented * (1.0 - 1e-6)
     }
 }
 
 pub(super) struct Bvh {
     pub nodes: Vec<Node>,
+    /// The exact bounding box of all triangles.
+    pub bounds: (V3, V3),
     /// The triangles in leaf order.
     pub triangles: Vec<Tri>,
 }
@@ -136,6 +179,7 @@ pub(super) fn build(triangles: Vec<Tri>) -> Bvh {
     Bvh {
         nodes,
         triangles: ordered,
+        bounds: (lo, hi),
     }
 }
 
@@ -273,9 +317,10 @@ fn split(items: &mut [Item], depth: usize) -> usize {
 
 /// Exact `f64` bounds, children before parents.
 fn fit_bounds(nodes: &mut [Node], triangles: &[Tri]) {
+    let mut exact = vec![([0.0; 3], [0.0; 3]); nodes.len()];
     for i in (0..nodes.len()).rev() {
         let node = nodes[i];
-        let (lo, hi) = if node.is_leaf() {
+        exact[i] = if node.is_leaf() {
             let tris = &triangles[node.first as usize..(node.first + node.count) as usize];
             tris.iter().fold(
                 ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
@@ -287,11 +332,10 @@ fn fit_bounds(nodes: &mut [Node], triangles: &[Tri]) {
                 },
             )
         } else {
-            let (l, r) = (nodes[i + 1], nodes[node.first as usize]);
-            (min(l.lo, r.lo), max(l.hi, r.hi))
+            let (l, r) = (exact[i + 1], exact[node.first as usize]);
+            (min(l.0, r.0), max(l.1, r.1))
         };
-        nodes[i].lo = lo;
-        nodes[i].hi = hi;
+        nodes[i].set_box(exact[i].0, exact[i].1);
     }
 }
 
@@ -341,23 +385,21 @@ fn fit_oriented(nodes: &mut [Node], triangles: &[Tri]) {
         e[axis] = 1.0;
         let u = cross(n, e);
         let u = scale(u, 1.0 / norm(u));
-        let frame = [u, cross(n, u), n];
+        let frame: [[f32; 3]; 3] = [u, cross(n, u), n].map(|a| a.map(|c| c as f32));
         let mut extent = [[f64::INFINITY, f64::NEG_INFINITY]; 3];
         for v in triangles[start as usize..end as usize].iter().flatten() {
             for (axis, [lo, hi]) in frame.iter().zip(&mut extent) {
-                let s = dot(*axis, *v);
+                let s = dot(widen(*axis), *v);
                 *lo = lo.min(s);
                 *hi = hi.max(s);
             }
         }
         // Rounding in the projections must not lift the bound above a true distance.
-        for [lo, hi] in &mut extent {
-            let pad = 1e-12 * (lo.abs().max(hi.abs()) + (*hi - *lo));
-            *lo -= pad;
-            *hi += pad;
-        }
+        node.extent = extent.map(|[lo, hi]| {
+            let pad = 1e-12 * (lo.abs().max(hi.abs()) + (hi - lo));
+            [round_f32(lo - pad, true), round_f32(hi + pad, false)]
+        });
         node.frame = frame;
-        node.extent = extent;
     });
 }
 
@@ -372,7 +414,7 @@ mod tests {
             assert!((1..=LEAF as u32).contains(&n.count));
             for t in &bvh.triangles[n.first as usize..(n.first + n.count) as usize] {
                 for p in t {
-                    assert!((0..3).all(|a| n.lo[a] <= p[a] && p[a] <= n.hi[a]));
+                    assert!((0..3).all(|a| n.lo()[a] <= p[a] && p[a] <= n.hi()[a]));
                 }
             }
             for s in n.first..n.first + n.count {
@@ -384,7 +426,7 @@ mod tests {
                 assert!(c > i);
                 let child = bvh.nodes[c];
                 for a in 0..3 {
-                    assert!(n.lo[a] <= child.lo[a] && child.hi[a] <= n.hi[a]);
+                    assert!(n.lo()[a] <= child.lo()[a] && child.hi()[a] <= n.hi()[a]);
                 }
                 check(bvh, c, depth + 1, seen);
             }

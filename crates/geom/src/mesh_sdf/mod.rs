@@ -159,17 +159,12 @@ impl MeshSdf {
             bvh: built - prepared,
             moments: built.elapsed(),
         };
-        let root = bvh.nodes[0];
+        let (lo, hi) = bvh.bounds;
         let scale = (0..3)
-            .map(|a| {
-                root.lo[a]
-                    .abs()
-                    .max(root.hi[a].abs())
-                    .max(root.hi[a] - root.lo[a])
-            })
+            .map(|a| lo[a].abs().max(hi[a].abs()).max(hi[a] - lo[a]))
             .fold(0.0, f64::max);
         Ok(MeshSdf {
-            bounds: (root.lo, root.hi),
+            bounds: (lo, hi),
             tolerance: 1e-12 * scale,
             bvh,
             moments,

@@ -51,21 +51,28 @@ pub(super) fn moments(bvh: &Bvh, beta: f64) -> Vec<Moments> {
     let mut out = vec![Moments::default(); nodes.len()];
     // Radius bounds, kept apart from `far2` until the end.
     let mut radius = vec![0.0f64; nodes.len()];
+    // Leaves hold the triangle work and are independent; interior nodes only combine.
+    out.par_iter_mut()
+        .zip(radius.par_iter_mut())
+        .zip(nodes.par_iter())
+        .filter(|(_, node)| node.is_leaf())
+        .for_each(|((m, r), node)| {
+            let range = node.first as usize..(node.first + node.count) as usize;
+            (*m, *r) = leaf_moments(&bvh.triangles[range]);
+        });
     for i in (0..nodes.len()).rev() {
         let node = nodes[i];
-        let (m, r) = if node.is_leaf() {
-            leaf_moments(&bvh.triangles[node.first as usize..(node.first + node.count) as usize])
-        } else {
-            let (l, rr) = (i + 1, node.first as usize);
-            let m = combine(&out[l], &out[rr]);
-            let through_children = [l, rr]
-                .map(|c| norm(sub(out[c].center, m.center)) + radius[c])
-                .into_iter()
-                .fold(0.0, f64::max);
-            (m, through_children.min(corner_radius(&node, m.center)))
-        };
+        if node.is_leaf() {
+            continue;
+        }
+        let (l, rr) = (i + 1, node.first as usize);
+        let m = combine(&out[l], &out[rr]);
+        let through_children = [l, rr]
+            .map(|c| norm(sub(out[c].center, m.center)) + radius[c])
+            .into_iter()
+            .fold(0.0, f64::max);
+        radius[i] = through_children.min(corner_radius(&node, m.center));
         out[i] = m;
-        radius[i] = r;
     }
     out.par_iter_mut()
         .zip(&radius)
@@ -165,7 +172,8 @@ fn combine(l: &Moments, r: &Moments) -> Moments {
 
 /// Farthest corner of the node's box from `c`: a bound on the distance to its triangles.
 fn corner_radius(node: &Node, c: V3) -> f64 {
-    let d: V3 = std::array::from_fn(|a| (c[a] - node.lo[a]).abs().max((node.hi[a] - c[a]).abs()));
+    let (lo, hi) = (node.lo(), node.hi());
+    let d: V3 = std::array::from_fn(|a| (c[a] - lo[a]).abs().max((hi[a] - c[a]).abs()));
     norm(max(d, [0.0; 3]))
 }
 
