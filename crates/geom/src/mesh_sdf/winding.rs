@@ -35,8 +35,8 @@ use std::f64::consts::PI;
 pub(super) struct Moments {
     /// Area-weighted centre of the triangles' centroids.
     pub center: V3,
-    /// Squared `β r`: from this squared distance on, the node is seen from afar.
-    pub far2: f64,
+    /// Squared radius `r`: from the squared distance `β² r²` on, the node is seen from afar.
+    pub radius2: f64,
     pub m1: V3,
     pub m2: [V3; 3],
     /// `M₃` as one symmetric matrix per `j`, stored `[kk=00, 11, 22, 01, 02, 12]`.
@@ -46,10 +46,10 @@ pub(super) struct Moments {
 }
 
 /// The moments of every node, computed bottom-up.
-pub(super) fn moments(bvh: &Bvh, beta: f64) -> Vec<Moments> {
+pub(super) fn moments(bvh: &Bvh) -> Vec<Moments> {
     let nodes = &bvh.nodes;
     let mut out = vec![Moments::default(); nodes.len()];
-    // Radius bounds, kept apart from `far2` until the end.
+    // Radius bounds, kept apart from `radius2` until the end.
     let mut radius = vec![0.0f64; nodes.len()];
     // Leaves hold the triangle work and are independent; interior nodes only combine.
     out.par_iter_mut()
@@ -76,7 +76,7 @@ pub(super) fn moments(bvh: &Bvh, beta: f64) -> Vec<Moments> {
     }
     out.par_iter_mut()
         .zip(&radius)
-        .for_each(|(m, &r)| m.far2 = (beta * r) * (beta * r));
+        .for_each(|(m, &r)| m.radius2 = r * r);
     out
 }
 
@@ -162,7 +162,7 @@ fn combine(l: &Moments, r: &Moments) -> Moments {
     }
     Moments {
         center,
-        far2: 0.0,
+        radius2: 0.0,
         m1: add(l.m1, r.m1),
         m2,
         m3,
@@ -217,8 +217,8 @@ fn far_field(m: &Moments, x: V3, r2: f64) -> f64 {
         + 0.5 * (-3.0 * (2.0 * a + b) * inv5 + 15.0 * c * inv7)
 }
 
-/// The winding number at `q`, hierarchically.
-pub(super) fn fast(bvh: &Bvh, moments: &[Moments], q: V3) -> f64 {
+/// The winding number at `q`, hierarchically, with far-field threshold `β = sqrt(beta2)`.
+pub(super) fn fast(bvh: &Bvh, moments: &[Moments], q: V3, beta2: f64) -> f64 {
     let mut stack = [0u32; MAX_DEPTH + 2];
     let mut top = 1;
     let mut sum = 0.0;
@@ -228,7 +228,7 @@ pub(super) fn fast(bvh: &Bvh, moments: &[Moments], q: V3) -> f64 {
         let m = &moments[i];
         let x = sub(m.center, q);
         let r2 = dot(x, x);
-        if r2 > m.far2 {
+        if r2 > beta2 * m.radius2 {
             sum += far_field(m, x, r2);
             continue;
         }
