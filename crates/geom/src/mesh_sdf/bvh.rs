@@ -12,18 +12,19 @@
 //! exact. Below depth [`MEDIAN_DEPTH`] a split falls back to the median, which bounds the depth
 //! by `MEDIAN_DEPTH + log2 n` ([`MAX_DEPTH`]), so traversal stacks can be fixed arrays.
 //!
-//! Bounds: every node has an axis-aligned box, and nodes of at most [`OBB_MAX`] triangles an
-//! oriented box along their mean normal ([`fit_oriented`] says why). A node's distance bound
-//! is its oriented box's when it has one (much the tighter on smooth patches; taking the max
-//! with the aligned box cost more in arithmetic than it saved in pruning), its aligned box's
-//! otherwise. Both are stored in `f32` rounded outward, so they still contain their triangles.
+//! Bounds: every node has an axis-aligned box ([`Bvh::boxes`]), and the box a distance query
+//! uses ([`Node`]) is oriented along the mean normal for nodes of at most [`OBB_MAX`]
+//! triangles ([`fit_oriented`] says why), aligned for larger ones. On smooth patches the
+//! oriented box is much the tighter, and intersecting it with the aligned one cost more in
+//! arithmetic than it saved in pruning. Boxes are stored in `f32` rounded outward, so they
+//! still contain their triangles.
 //!
 //! Subtrees above [`PARALLEL`] triangles are built on rayon in parallel, each into its own
 //! node list, and the lists are stitched in preorder once at the end. The result is the same
 //! whatever the thread count.
 
 use super::prepare::Tri;
-use super::vec3::{V3, add, box_dist2, cross, dot, max, min, norm, scale, sub};
+use super::vec3::{V3, add, cross, dot, max, min, norm, scale, sub};
 use rayon::prelude::*;
 
 /// Most triangles in a leaf.
@@ -34,34 +35,32 @@ const MEDIAN_DEPTH: usize = 48;
 /// Deepest possible node (root at 0): median splits halve, and counts fit in 32 bits.
 pub(super) const MAX_DEPTH: usize = MEDIAN_DEPTH + 33;
 
-/// One node, 96 bytes: its boxes are stored in `f32`, rounded outward, so that a node fits
-/// in one and a half cache lines (queries are bound by memory traffic, not arithmetic).
+/// One node, one cache line (queries are bound by memory traffic, not arithmetic): a box in
+/// the orthonormal frame `(u, v = n × u, n)`, stored in `f32` rounded outward, so it still
+/// contains the node's triangles. Nodes without an oriented box use the axis frame, where the
+/// box is the aligned one.
 #[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
 pub(super) struct Node {
-    lo: [f32; 3],
-    hi: [f32; 3],
+    u: [f32; 3],
+    n: [f32; 3],
+    /// `extent[a][0] ≤ axis_a·x ≤ extent[a][1]` for the axes `u, v, n`, computed in `f64`
+    /// with the stored axes (and `v` as [`Node::axes`] derives it).
+    extent: [[f32; 2]; 3],
     /// Leaf: its first triangle; interior: its second child.
     pub first: u32,
     /// Leaf: its number of triangles (at least 1); interior: 0.
     pub count: u32,
-    /// An oriented box around the triangles: `extent[a][0] ≤ frame[a]·x ≤ extent[a][1]`
-    /// (computed in `f64` with the stored `f32` axes), `frame` orthonormal to `f32` precision
-    /// with `frame[2]` along the mean normal; infinite extents when there is none.
-    frame: [[f32; 3]; 3],
-    extent: [[f32; 2]; 3],
-    _pad: [u32; 1],
 }
 
 impl Default for Node {
     fn default() -> Node {
         Node {
-            lo: [0.0; 3],
-            hi: [0.0; 3],
+            u: [1.0, 0.0, 0.0],
+            n: [0.0, 0.0, 1.0],
+            extent: [[f32::NEG_INFINITY, f32::INFINITY]; 3],
             first: 0,
             count: 0,
-            frame: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-            extent: [[f32::NEG_INFINITY, f32::INFINITY]; 3],
-            _pad: [0],
         }
     }
 }
@@ -86,6 +85,62 @@ impl Node {
         self.count > 0
     }
 
+    /// The frame `u, v, n` in `f64`; queries and construction derive `v` identically.
+    #[inline]
+    fn axes(&self) -> [V3; 3] {
+        let (u, n) = (widen(self.u), widen(self.n));
+        [u, cross(n, u), n]
+    }
+
+    /// A lower bound on the squared distance from `p` to the node's triangles. Shrunk by 1e-6
+    /// because the `f32` axes are orthonormal only to about 1e-7.
+    #[inline]
+    pub(super) fn dist2(&self, p: V3) -> f64 {
+        let mut d2 = 0.0;
+        for (axis, [lo, hi]) in self.axes().iter().zip(self.extent) {
+            let s = dot(*axis, p);
+            let d = (f64::from(lo) - s).max(s - f64::from(hi)).max(0.0);
+            d2 += d * d;
+        }
+        d2 * (1.0 - 1e-6)
+    }
+
+    /// Sets the frame `u, n` and the box of `points` in it.
+    fn fit<'a>(&mut self, u: V3, n: V3, points: impl Iterator<Item = &'a V3>) {
+        self.u = u.map(|c| c as f32);
+        self.n = n.map(|c| c as f32);
+        let axes = self.axes();
+        let mut extent = [[f64::INFINITY, f64::NEG_INFINITY]; 3];
+        for v in points {
+            for (axis, [lo, hi]) in axes.iter().zip(&mut extent) {
+                let s = dot(*axis, *v);
+                *lo = lo.min(s);
+                *hi = hi.max(s);
+            }
+        }
+        // Rounding in the projections must not lift the bound above a true distance.
+        self.extent = extent.map(|[lo, hi]| {
+            let pad = 1e-12 * (lo.abs().max(hi.abs()) + (hi - lo));
+            [round_f32(lo - pad, true), round_f32(hi + pad, false)]
+        });
+    }
+}
+
+/// An axis-aligned box in `f32`, rounded outward.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Aabb {
+    lo: [f32; 3],
+    hi: [f32; 3],
+}
+
+impl Aabb {
+    fn new(lo: V3, hi: V3) -> Aabb {
+        Aabb {
+            lo: lo.map(|c| round_f32(c, true)),
+            hi: hi.map(|c| round_f32(c, false)),
+        }
+    }
+
     pub(super) fn lo(&self) -> V3 {
         widen(self.lo)
     }
@@ -93,32 +148,13 @@ impl Node {
     pub(super) fn hi(&self) -> V3 {
         widen(self.hi)
     }
-
-    fn set_box(&mut self, lo: V3, hi: V3) {
-        self.lo = lo.map(|c| round_f32(c, true));
-        self.hi = hi.map(|c| round_f32(c, false));
-    }
-
-    /// A lower bound on the squared distance from `p` to the node's triangles, from its
-    /// oriented box when it has one, else its aligned box. The oriented bound is shrunk by
-    /// 1e-6 because its `f32` axes are orthonormal only to about 1e-7.
-    #[inline]
-    pub(super) fn dist2(&self, p: V3) -> f64 {
-        if self.extent[0][0] == f32::NEG_INFINITY {
-            return box_dist2(p, self.lo(), self.hi());
-        }
-        let mut oriented = 0.0;
-        for (axis, [lo, hi]) in self.frame.iter().zip(self.extent) {
-            let s = dot(widen(*axis), p);
-            let d = (f64::from(lo) - s).max(s - f64::from(hi)).max(0.0);
-            oriented += d * d;
-        }
-        oriented * (1.0 - 1e-6)
-    }
 }
 
 pub(super) struct Bvh {
     pub nodes: Vec<Node>,
+    /// Each node's aligned box (for box queries and construction; distance queries use
+    /// `nodes`).
+    pub boxes: Vec<Aabb>,
     /// The exact bounding box of all triangles.
     pub bounds: (V3, V3),
     /// The triangles in leaf order.
@@ -174,10 +210,11 @@ pub(super) fn build(triangles: Vec<Tri>) -> Bvh {
         .par_iter()
         .map(|it| triangles[it.id as usize])
         .collect();
-    fit_bounds(&mut nodes, &ordered);
+    let boxes = fit_bounds(&mut nodes, &ordered);
     fit_oriented(&mut nodes, &ordered);
     Bvh {
         nodes,
+        boxes,
         triangles: ordered,
         bounds: (lo, hi),
     }
@@ -316,7 +353,9 @@ fn split(items: &mut [Item], depth: usize) -> usize {
 }
 
 /// Exact `f64` bounds, children before parents.
-fn fit_bounds(nodes: &mut [Node], triangles: &[Tri]) {
+/// Exact aligned boxes, children before parents; every node starts with its aligned box in
+/// the axis frame.
+fn fit_bounds(nodes: &mut [Node], triangles: &[Tri]) -> Vec<Aabb> {
     let mut exact = vec![([0.0; 3], [0.0; 3]); nodes.len()];
     for i in (0..nodes.len()).rev() {
         let node = nodes[i];
@@ -335,8 +374,15 @@ fn fit_bounds(nodes: &mut [Node], triangles: &[Tri]) {
             let (l, r) = (exact[i + 1], exact[node.first as usize]);
             (min(l.0, r.0), max(l.1, r.1))
         };
-        nodes[i].set_box(exact[i].0, exact[i].1);
     }
+    nodes
+        .par_iter_mut()
+        .zip(&exact)
+        .map(|(node, &(lo, hi))| {
+            node.fit([1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [lo, hi].iter());
+            Aabb::new(lo, hi)
+        })
+        .collect()
 }
 
 /// Nodes above this many triangles get no oriented box: a large patch is too curved for one
@@ -385,21 +431,11 @@ fn fit_oriented(nodes: &mut [Node], triangles: &[Tri]) {
         e[axis] = 1.0;
         let u = cross(n, e);
         let u = scale(u, 1.0 / norm(u));
-        let frame: [[f32; 3]; 3] = [u, cross(n, u), n].map(|a| a.map(|c| c as f32));
-        let mut extent = [[f64::INFINITY, f64::NEG_INFINITY]; 3];
-        for v in triangles[start as usize..end as usize].iter().flatten() {
-            for (axis, [lo, hi]) in frame.iter().zip(&mut extent) {
-                let s = dot(widen(*axis), *v);
-                *lo = lo.min(s);
-                *hi = hi.max(s);
-            }
-        }
-        // Rounding in the projections must not lift the bound above a true distance.
-        node.extent = extent.map(|[lo, hi]| {
-            let pad = 1e-12 * (lo.abs().max(hi.abs()) + (hi - lo));
-            [round_f32(lo - pad, true), round_f32(hi + pad, false)]
-        });
-        node.frame = frame;
+        node.fit(
+            u,
+            n,
+            triangles[start as usize..end as usize].iter().flatten(),
+        );
     });
 }
 
@@ -414,7 +450,9 @@ mod tests {
             assert!((1..=LEAF as u32).contains(&n.count));
             for t in &bvh.triangles[n.first as usize..(n.first + n.count) as usize] {
                 for p in t {
-                    assert!((0..3).all(|a| n.lo()[a] <= p[a] && p[a] <= n.hi()[a]));
+                    let b = bvh.boxes[i];
+                    assert!((0..3).all(|a| b.lo()[a] <= p[a] && p[a] <= b.hi()[a]));
+                    assert!(n.dist2(*p) < 1e-20);
                 }
             }
             for s in n.first..n.first + n.count {
@@ -424,10 +462,8 @@ mod tests {
         } else {
             for c in [i + 1, n.first as usize] {
                 assert!(c > i);
-                let child = bvh.nodes[c];
-                for a in 0..3 {
-                    assert!(n.lo()[a] <= child.lo()[a] && child.hi()[a] <= n.hi()[a]);
-                }
+                let (b, cb) = (bvh.boxes[i], bvh.boxes[c]);
+                assert!((0..3).all(|a| b.lo()[a] <= cb.lo()[a] && cb.hi()[a] <= b.hi()[a]));
                 check(bvh, c, depth + 1, seen);
             }
         }

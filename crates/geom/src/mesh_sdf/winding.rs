@@ -24,7 +24,7 @@
 //! visited, down to exact leaves. The truncation error of a node is about `(1/β)³` of its
 //! contribution; `tests/mesh_sdf_winding.rs` states the resulting bound for β = 2.
 
-use super::bvh::{Bvh, MAX_DEPTH, Node};
+use super::bvh::{Aabb, Bvh, MAX_DEPTH};
 use super::prepare::Tri;
 use super::vec3::{V3, add, cross, dot, max, norm, scale, sub};
 use rayon::prelude::*;
@@ -71,7 +71,7 @@ pub(super) fn moments(bvh: &Bvh) -> Vec<Moments> {
             .map(|c| norm(sub(out[c].center, m.center)) + radius[c])
             .into_iter()
             .fold(0.0, f64::max);
-        radius[i] = through_children.min(corner_radius(&node, m.center));
+        radius[i] = through_children.min(corner_radius(&bvh.boxes[i], m.center));
         out[i] = m;
     }
     out.par_iter_mut()
@@ -171,8 +171,8 @@ fn combine(l: &Moments, r: &Moments) -> Moments {
 }
 
 /// Farthest corner of the node's box from `c`: a bound on the distance to its triangles.
-fn corner_radius(node: &Node, c: V3) -> f64 {
-    let (lo, hi) = (node.lo(), node.hi());
+fn corner_radius(b: &Aabb, c: V3) -> f64 {
+    let (lo, hi) = (b.lo(), b.hi());
     let d: V3 = std::array::from_fn(|a| (c[a] - lo[a]).abs().max((hi[a] - c[a]).abs()));
     norm(max(d, [0.0; 3]))
 }
