@@ -36,6 +36,21 @@ fn best_of<T>(runs: usize, mut f: impl FnMut() -> T) -> (f64, T) {
     (best, last.expect("at least one run"))
 }
 
+/// CPU seconds used by this process so far (user + system), from `/proc/self/stat`; 0 where
+/// that is not available. Less disturbed than wall time when other jobs share the machine.
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    // Fields after the parenthesised command name; utime and stime are the 12th and 13th.
+    let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
+    let ticks: f64 = rest
+        .split_whitespace()
+        .skip(11)
+        .take(2)
+        .filter_map(|v| v.parse::<f64>().ok())
+        .sum();
+    ticks / 100.0
+}
+
 /// Samples every plane of `grid` in parallel; returns the values.
 fn sample_all(sampler: &dyn PlaneSampler, grid: &Grid) -> Vec<f64> {
     let mut values = vec![0.0; grid.plane_len() * grid.counts[2]];
@@ -92,7 +107,9 @@ fn main() {
     let pad = 0.1;
     let (lo, hi) = sdf.bounds();
     let grid = Grid::spanning(lo.map(|c| c - pad), hi.map(|c| c + pad), [n, n, n]);
+    let cpu = cpu_seconds();
     let (t_sdf, values) = best_of(2, || sample_all(sdf.sampler(&grid).as_ref(), &grid));
+    let cpu_sdf = (cpu_seconds() - cpu) / 2.0;
     // Spot-check against the analytic torus: the mesh is within its chord error of it.
     let worst = values
         .iter()
@@ -108,9 +125,9 @@ fn main() {
         })
         .fold(0.0, f64::max);
     println!(
-        "{n}^3 signed distances: {t_sdf:.3} s ({:.0} ns/sample/core), max |mesh − analytic| \
-         on a subset {worst:.1e}",
-        t_sdf * 1e9 * rayon::current_num_threads() as f64 / values.len() as f64
+        "{n}^3 signed distances: {t_sdf:.3} s wall, {cpu_sdf:.3} s CPU ({:.0} ns CPU per \
+         sample), max |mesh − analytic| on a subset {worst:.1e}",
+        cpu_sdf * 1e9 / values.len() as f64
     );
 
     let containment = MeshSdf::new(
@@ -121,13 +138,18 @@ fn main() {
         },
     )
     .expect("mesh");
+    let cpu = cpu_seconds();
     let (t_in, inside) = best_of(2, || sample_all(containment.sampler(&grid).as_ref(), &grid));
+    let cpu_in = (cpu_seconds() - cpu) / 2.0;
     let disagree = inside
         .iter()
         .zip(&values)
         .filter(|(c, d)| **d != 0.0 && (**c < 0.0) != (**d < 0.0))
         .count();
-    println!("{n}^3 containment: {t_in:.3} s, {disagree} samples disagree with the distance sign");
+    println!(
+        "{n}^3 containment: {t_in:.3} s wall, {cpu_in:.3} s CPU, {disagree} samples disagree \
+         with the distance sign"
+    );
 
     let band = 2.0 * grid.spacing[0];
     let banded = MeshSdf::new(
@@ -138,8 +160,13 @@ fn main() {
         },
     )
     .expect("mesh");
+    let cpu = cpu_seconds();
     let (t_band, _) = best_of(2, || sample_all(banded.sampler(&grid).as_ref(), &grid));
-    println!("{n}^3 signed distances clamped to ±{band:.4} (two cells): {t_band:.3} s");
+    let cpu_band = (cpu_seconds() - cpu) / 2.0;
+    println!(
+        "{n}^3 signed distances clamped to ±{band:.4} (two cells): {t_band:.3} s wall, \
+         {cpu_band:.3} s CPU"
+    );
 
     let sampler = sdf.sampler(&grid);
     let (t_contour, mesh) = best_of(1, || {

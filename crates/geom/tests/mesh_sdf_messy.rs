@@ -249,3 +249,48 @@ fn an_open_sheet_is_nowhere_inside() {
         assert!(!mesh.contains(p));
     }
 }
+
+/// On an open surface the samplers cannot carry the side along rows; they must still agree
+/// with point queries wherever the side is not a near tie (`w` within 0.05 of ½).
+#[test]
+fn samplers_of_an_open_mesh_agree_with_point_queries() {
+    use latticebuild_geom::field::{Grid, ScalarField};
+    use latticebuild_geom::mesh_sdf::Mode;
+    let mut soup = icosphere(3, 1.0);
+    soup.triangles.retain(|t| {
+        let c = t.map(|i| soup.positions[i as usize][2]);
+        (c[0] + c[1] + c[2]) / 3.0 < 0.8
+    });
+    let exact = sdf(&soup);
+    assert!(!exact.report().closed);
+    let grid = Grid::spanning([-1.2; 3], [1.2; 3], [33; 3]);
+    for mode in [Mode::SignedDistance, Mode::Containment] {
+        let mesh = MeshSdf::new(
+            &soup,
+            SdfOptions {
+                mode,
+                ..SdfOptions::default()
+            },
+        )
+        .expect("mesh");
+        let sampler = mesh.sampler(&grid);
+        let mut plane = vec![0.0; grid.plane_len()];
+        let mut checked = 0;
+        for k in 0..grid.counts[2] {
+            sampler.sample_plane(k, &mut plane);
+            for (n, &v) in plane.iter().enumerate() {
+                let p = [
+                    grid.coord(0, n % 33),
+                    grid.coord(1, n / 33),
+                    grid.coord(2, k),
+                ];
+                if (exact.winding_number_exact(p) - 0.5).abs() < 0.05 || v == 0.0 {
+                    continue;
+                }
+                assert_eq!(v < 0.0, exact.contains(p), "{mode:?} at {p:?}");
+                checked += 1;
+            }
+        }
+        assert!(checked > 30_000);
+    }
+}

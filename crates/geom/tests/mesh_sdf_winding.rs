@@ -129,6 +129,30 @@ fn hierarchical_winding_number_agrees_with_the_exact_sum() {
             "{p:?}: fast {fast}, exact {exact}"
         );
     }
+    // The samplers decide sides with β = 1.25 when that estimate is more than 0.2 from ½:
+    // its error must stay well below 0.2.
+    let coarse = sdf(
+        &soup,
+        SdfOptions {
+            beta: 1.25,
+            ..SdfOptions::default()
+        },
+    );
+    let mut rng = Rng::new(4);
+    let mut coarse_points: Vec<[f64; 3]> = (0..500).map(|_| rng.point(-1.6, 1.6)).collect();
+    coarse_points.extend(near_surface(
+        &soup,
+        &[-1e-3, -1e-6, 1e-6, 1e-3],
+        &mut rng,
+        100,
+    ));
+    for p in coarse_points {
+        let (fast, exact) = (coarse.winding_number(p), coarse.winding_number_exact(p));
+        assert!(
+            (fast - exact).abs() < 0.1,
+            "β = 1.25 at {p:?}: fast {fast}, exact {exact}"
+        );
+    }
     // A larger β looks closer before approximating: more accurate.
     let tight = sdf(
         &soup,

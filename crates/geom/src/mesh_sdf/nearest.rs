@@ -133,7 +133,8 @@ pub(super) fn any_box_overlap(bvh: &Bvh, lo: V3, hi: V3) -> bool {
         top -= 1;
         let i = stack[top];
         let node = &nodes[i as usize];
-        if !overlaps(node.lo, node.hi) {
+        let b = &bvh.boxes[i as usize];
+        if !overlaps(b.lo(), b.hi()) {
             continue;
         }
         if node.is_leaf() {

@@ -112,32 +112,38 @@ pub(super) fn prepare(soup: &TriangleSoup, repair: bool) -> Surface {
 
 /// For each position, the smallest index of a position with the same coordinates.
 fn weld(positions: &[V3]) -> Vec<u32> {
-    let key = |i: u32| positions[i as usize].map(|c| (c + 0.0).to_bits());
-    let mut order: Vec<u32> = (0..positions.len() as u32).collect();
-    order.par_sort_unstable_by_key(|&i| (key(i), i));
+    // Keys computed once: sorting compares them many times.
+    let mut keyed: Vec<([u64; 3], u32)> = positions
+        .par_iter()
+        .enumerate()
+        .map(|(i, p)| (p.map(|c| (c + 0.0).to_bits()), i as u32))
+        .collect();
+    keyed.par_sort_unstable();
     let mut canon = vec![0u32; positions.len()];
-    let mut rep = 0u32;
-    for (n, &i) in order.iter().enumerate() {
-        if n == 0 || key(order[n - 1]) != key(i) {
-            rep = i;
+    for run in keyed.chunk_by(|a, b| a.0 == b.0) {
+        // Sorted by index within a run: the first is the smallest.
+        let rep = run[0].1;
+        for &(_, i) in run {
+            canon[i as usize] = rep;
         }
-        canon[i as usize] = rep;
     }
     canon
 }
 
 /// `faces` without later repeats of a triangle (same vertices, same cyclic order), in order.
 fn without_repeats(faces: Vec<[u32; 3]>) -> Vec<[u32; 3]> {
-    let rotated = |t: &[u32; 3]| {
+    // The triangle rotated to start at its smallest index, and its position, in one `u128`.
+    let key = |(i, t): (usize, &[u32; 3])| {
         let k = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
-        [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
+        let r = [t[k], t[(k + 1) % 3], t[(k + 2) % 3]].map(u128::from);
+        (r[0] << 96) | (r[1] << 64) | (r[2] << 32) | i as u128
     };
-    let mut order: Vec<u32> = (0..faces.len() as u32).collect();
-    order.par_sort_unstable_by_key(|&i| (rotated(&faces[i as usize]), i));
+    let mut keys: Vec<u128> = faces.par_iter().enumerate().map(key).collect();
+    keys.par_sort_unstable();
     let mut keep = vec![true; faces.len()];
-    for w in order.windows(2) {
-        if rotated(&faces[w[0] as usize]) == rotated(&faces[w[1] as usize]) {
-            keep[w[1] as usize] = false;
+    for w in keys.windows(2) {
+        if w[0] >> 32 == w[1] >> 32 {
+            keep[(w[1] & 0xffff_ffff) as usize] = false;
         }
     }
     faces
@@ -149,7 +155,8 @@ fn without_repeats(faces: Vec<[u32; 3]>) -> Vec<[u32; 3]> {
 
 /// One entry per triangle side: the undirected edge (low vertex, high vertex) packed in a
 /// `u64`, and `3 * face + side` with the direction in bit 63 (set when the side runs from the
-/// high vertex to the low one). Sorted, so the sides of one edge are adjacent.
+/// high vertex to the low one). Sorted by edge only, so the sides of one edge are adjacent in
+/// an order that may vary; everything computed from a run of sides is independent of it.
 fn sorted_edges(faces: &[[u32; 3]]) -> Vec<(u64, u64)> {
     let mut edges: Vec<(u64, u64)> = faces
         .par_iter()
@@ -163,7 +170,7 @@ fn sorted_edges(faces: &[[u32; 3]]) -> Vec<(u64, u64)> {
             })
         })
         .collect();
-    edges.par_sort_unstable();
+    edges.par_sort_unstable_by_key(|e| e.0);
     edges
 }
 

@@ -46,14 +46,3 @@ pub(super) fn min(a: V3, b: V3) -> V3 {
 pub(super) fn max(a: V3, b: V3) -> V3 {
     [a[0].max(b[0]), a[1].max(b[1]), a[2].max(b[2])]
 }
-
-/// Squared distance from `p` to the box `[lo, hi]` (0 inside).
-#[inline(always)]
-pub(super) fn box_dist2(p: V3, lo: V3, hi: V3) -> f64 {
-    let mut d2 = 0.0;
-    for a in 0..3 {
-        let d = (lo[a] - p[a]).max(p[a] - hi[a]).max(0.0);
-        d2 += d * d;
-    }
-    d2
-}

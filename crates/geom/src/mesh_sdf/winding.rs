@@ -24,7 +24,7 @@
 //! visited, down to exact leaves. The truncation error of a node is about `(1/β)³` of its
 //! contribution; `tests/mesh_sdf_winding.rs` states the resulting bound for β = 2.
 
-use super::bvh::{Bvh, MAX_DEPTH, Node};
+use super::bvh::{Aabb, Bvh, MAX_DEPTH};
 use super::prepare::Tri;
 use super::vec3::{V3, add, cross, dot, max, norm, scale, sub};
 use rayon::prelude::*;
@@ -35,8 +35,8 @@ use std::f64::consts::PI;
 pub(super) struct Moments {
     /// Area-weighted centre of the triangles' centroids.
     pub center: V3,
-    /// Squared `β r`: from this squared distance on, the node is seen from afar.
-    pub far2: f64,
+    /// Squared radius `r`: from the squared distance `β² r²` on, the node is seen from afar.
+    pub radius2: f64,
     pub m1: V3,
     pub m2: [V3; 3],
     /// `M₃` as one symmetric matrix per `j`, stored `[kk=00, 11, 22, 01, 02, 12]`.
@@ -46,30 +46,37 @@ pub(super) struct Moments {
 }
 
 /// The moments of every node, computed bottom-up.
-pub(super) fn moments(bvh: &Bvh, beta: f64) -> Vec<Moments> {
+pub(super) fn moments(bvh: &Bvh) -> Vec<Moments> {
     let nodes = &bvh.nodes;
     let mut out = vec![Moments::default(); nodes.len()];
-    // Radius bounds, kept apart from `far2` until the end.
+    // Radius bounds, kept apart from `radius2` until the end.
     let mut radius = vec![0.0f64; nodes.len()];
+    // Leaves hold the triangle work and are independent; interior nodes only combine.
+    out.par_iter_mut()
+        .zip(radius.par_iter_mut())
+        .zip(nodes.par_iter())
+        .filter(|(_, node)| node.is_leaf())
+        .for_each(|((m, r), node)| {
+            let range = node.first as usize..(node.first + node.count) as usize;
+            (*m, *r) = leaf_moments(&bvh.triangles[range]);
+        });
     for i in (0..nodes.len()).rev() {
         let node = nodes[i];
-        let (m, r) = if node.is_leaf() {
-            leaf_moments(&bvh.triangles[node.first as usize..(node.first + node.count) as usize])
-        } else {
-            let (l, rr) = (i + 1, node.first as usize);
-            let m = combine(&out[l], &out[rr]);
-            let through_children = [l, rr]
-                .map(|c| norm(sub(out[c].center, m.center)) + radius[c])
-                .into_iter()
-                .fold(0.0, f64::max);
-            (m, through_children.min(corner_radius(&node, m.center)))
-        };
+        if node.is_leaf() {
+            continue;
+        }
+        let (l, rr) = (i + 1, node.first as usize);
+        let m = combine(&out[l], &out[rr]);
+        let through_children = [l, rr]
+            .map(|c| norm(sub(out[c].center, m.center)) + radius[c])
+            .into_iter()
+            .fold(0.0, f64::max);
+        radius[i] = through_children.min(corner_radius(&bvh.boxes[i], m.center));
         out[i] = m;
-        radius[i] = r;
     }
     out.par_iter_mut()
         .zip(&radius)
-        .for_each(|(m, &r)| m.far2 = (beta * r) * (beta * r));
+        .for_each(|(m, &r)| m.radius2 = r * r);
     out
 }
 
@@ -155,7 +162,7 @@ fn combine(l: &Moments, r: &Moments) -> Moments {
     }
     Moments {
         center,
-        far2: 0.0,
+        radius2: 0.0,
         m1: add(l.m1, r.m1),
         m2,
         m3,
@@ -164,8 +171,9 @@ fn combine(l: &Moments, r: &Moments) -> Moments {
 }
 
 /// Farthest corner of the node's box from `c`: a bound on the distance to its triangles.
-fn corner_radius(node: &Node, c: V3) -> f64 {
-    let d: V3 = std::array::from_fn(|a| (c[a] - node.lo[a]).abs().max((node.hi[a] - c[a]).abs()));
+fn corner_radius(b: &Aabb, c: V3) -> f64 {
+    let (lo, hi) = (b.lo(), b.hi());
+    let d: V3 = std::array::from_fn(|a| (c[a] - lo[a]).abs().max((hi[a] - c[a]).abs()));
     norm(max(d, [0.0; 3]))
 }
 
@@ -209,8 +217,8 @@ fn far_field(m: &Moments, x: V3, r2: f64) -> f64 {
         + 0.5 * (-3.0 * (2.0 * a + b) * inv5 + 15.0 * c * inv7)
 }
 
-/// The winding number at `q`, hierarchically.
-pub(super) fn fast(bvh: &Bvh, moments: &[Moments], q: V3) -> f64 {
+/// The winding number at `q`, hierarchically, with far-field threshold `β = sqrt(beta2)`.
+pub(super) fn fast(bvh: &Bvh, moments: &[Moments], q: V3, beta2: f64) -> f64 {
     let mut stack = [0u32; MAX_DEPTH + 2];
     let mut top = 1;
     let mut sum = 0.0;
@@ -220,7 +228,7 @@ pub(super) fn fast(bvh: &Bvh, moments: &[Moments], q: V3) -> f64 {
         let m = &moments[i];
         let x = sub(m.center, q);
         let r2 = dot(x, x);
-        if r2 > m.far2 {
+        if r2 > beta2 * m.radius2 {
             sum += far_field(m, x, r2);
             continue;
         }
