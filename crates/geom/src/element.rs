@@ -165,7 +165,7 @@ pub fn contour_clipped(
 /// `p0 + u (p1 − p0) + v (p2 − p0) + w (p3 − p0)`, with `p1 − p0 = (1,1,0)`,
 /// `p2 − p0 = (0,1,1)`, `p3 − p0 = (1,0,1)` (determinant 2).
 #[inline]
-fn tetrahedron_point([u, v, w]: [f64; 3]) -> [f64; 3] {
+pub(crate) fn tetrahedron_point([u, v, w]: [f64; 3]) -> [f64; 3] {
     [-0.5 + u + w, -0.5 + u + v, -0.5 + v + w]
 }
 

@@ -21,6 +21,7 @@ pub mod mesh_sdf;
 pub mod sdf;
 pub mod spelling;
 pub mod symmetric;
+pub mod tile;
 pub mod tpms;
 pub mod validate;
 pub mod within;

@@ -1,0 +1,136 @@
+//! The cube's lattice: `n³` points `ξ = −½ + (i, j, k)/(n − 1)`, contoured by the streaming
+//! contourer's marching-cubes tables (the same face rule, so two elements sharing a face draw
+//! the same segments on it, and the caps use the same rule).
+//!
+//! Corners are numbered in Gmsh's hex order (0 (−,−,−), 1 (+,−,−), 2 (+,+,−), 3 (−,+,−), then
+//! the same at z = +½); faces in the tables' cap order `2·axis + side`.
+
+use super::lattice::{Lattice, Weights};
+use super::local::{LocalBuilder, LocalMesh, inside};
+use crate::contour::table::{CORNER_SLOT, EDGE_CORNERS, tables};
+
+/// Lattice coordinates (in units of `n − 1`) of Gmsh's hex corners.
+pub const HEX_CORNERS: [[u32; 3]; 8] = [
+    [0, 0, 0],
+    [1, 0, 0],
+    [1, 1, 0],
+    [0, 1, 0],
+    [0, 0, 1],
+    [1, 0, 1],
+    [1, 1, 1],
+    [0, 1, 1],
+];
+
+pub struct CubeLattice {
+    /// Points per edge.
+    n: u32,
+    face_masks: [u8; 6],
+}
+
+impl CubeLattice {
+    /// `n ≥ 2` points per edge.
+    pub fn new(n: usize) -> CubeLattice {
+        let face_masks = std::array::from_fn(|f| {
+            let (axis, side) = (f / 2, (f % 2) as u32);
+            (0..8).fold(0u8, |m, c| {
+                if HEX_CORNERS[c][axis] == side {
+                    m | 1 << c
+                } else {
+                    m
+                }
+            })
+        });
+        CubeLattice {
+            n: n as u32,
+            face_masks,
+        }
+    }
+
+    #[inline]
+    fn index(&self, [i, j, k]: [u32; 3]) -> u32 {
+        i + self.n * (j + self.n * k)
+    }
+
+    #[inline]
+    fn coords(&self, p: u32) -> [u32; 3] {
+        [p % self.n, (p / self.n) % self.n, p / (self.n * self.n)]
+    }
+}
+
+impl Lattice for CubeLattice {
+    fn index_len(&self) -> usize {
+        (self.n as usize).pow(3)
+    }
+
+    fn is_point(&self, p: u32) -> bool {
+        (p as usize) < self.index_len()
+    }
+
+    fn xi(&self, p: u32) -> [f64; 3] {
+        let m = f64::from(self.n - 1);
+        self.coords(p).map(|c| f64::from(c) / m - 0.5)
+    }
+
+    fn representative(&self, p: u32) -> u32 {
+        let m = self.n - 1;
+        let mut c = self.coords(p).map(|c| c.min(m - c));
+        c.sort_unstable();
+        self.index(c)
+    }
+
+    fn weights(&self, p: u32) -> Weights {
+        let m = self.n - 1;
+        let c = self.coords(p);
+        let mut out = Weights::default();
+        for (corner, at) in HEX_CORNERS.iter().enumerate() {
+            let w = (0..3).fold(1u32, |w, a| w * if at[a] == 0 { m - c[a] } else { c[a] });
+            if w > 0 {
+                out.push(corner as u8, w);
+            }
+        }
+        out
+    }
+
+    fn face_masks(&self) -> &[u8] {
+        &self.face_masks
+    }
+
+    fn contour(&self, values: &[f64]) -> LocalMesh {
+        let tables = tables();
+        let last = self.n - 2;
+        let mut builder = LocalBuilder::new(values, 6);
+        for k in 0..=last {
+            for j in 0..=last {
+                for i in 0..=last {
+                    let corner = |c: u8| {
+                        let c = u32::from(c);
+                        self.index([i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2)])
+                    };
+                    let config = (0..8u8).fold(0u8, |bits, c| {
+                        bits | u8::from(inside(values[corner(c) as usize])) << c
+                    });
+                    let vertex = |builder: &mut LocalBuilder, slot: u8| {
+                        if slot < CORNER_SLOT {
+                            let [a, b] = EDGE_CORNERS[slot as usize];
+                            builder.crossing(corner(a), corner(b))
+                        } else {
+                            builder.point(corner(slot - CORNER_SLOT))
+                        }
+                    };
+                    for tri in tables.triangles(config) {
+                        let t = tri.map(|s| vertex(&mut builder, s));
+                        builder.mesh.triangles.push(t);
+                    }
+                    let on_face = [i == 0, i == last, j == 0, j == last, k == 0, k == last];
+                    for (face, _) in on_face.iter().enumerate().filter(|(_, on)| **on) {
+                        for tri in tables.cap(config, face) {
+                            let t = tri.map(|s| vertex(&mut builder, s));
+                            builder.mesh.caps[face].push(t);
+                        }
+                    }
+                }
+            }
+        }
+        builder.finish()
+    }
+}
