@@ -33,7 +33,7 @@ impl ElementMap for Affine<'_> {
             (-q[0] + q[1] + q[2]) / 2.0,
             (q[0] - q[1] + q[2]) / 2.0,
         );
-        let x: Vec<[f64; 3]> = c.iter().map(|&n| self.nodes[n as usize]).collect();
+        let x: [[f64; 3]; 4] = std::array::from_fn(|k| self.nodes[c[k] as usize]);
         std::array::from_fn(|a| {
             x[0][a] + u * (x[1][a] - x[0][a]) + v * (x[2][a] - x[0][a]) + w * (x[3][a] - x[0][a])
         })

@@ -162,10 +162,23 @@ fn symmetric_samples(lattice: &dyn Lattice, field: &dyn ScalarField) -> Vec<f64>
         .collect()
 }
 
-/// A local vertex on the element boundary: the weights of its lattice ends.
+/// A local vertex on the element boundary: the weights of its lattice ends, and the faces
+/// whose caps alone use it (0 when surface triangles use it).
 struct SharedVertex {
     a: Weights,
     b: Option<Weights>,
+    caps: u8,
+}
+
+/// What an element does with one of its shared vertices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Role {
+    /// Only caps on interior faces use it: it is not in the output.
+    Unused,
+    /// The lowest element using it: it places and numbers it.
+    Owner,
+    /// Another element owns it.
+    Borrower,
 }
 
 /// Which faces of each element lie on the scaffold boundary (one bit per face).
@@ -174,15 +187,16 @@ fn boundary_faces(
     face_masks: &[u8],
 ) -> Result<(Vec<u8>, TileStats), TileError> {
     let n = elements.count();
-    let mut faces: Vec<(Vec<u32>, u32)> = (0..n)
+    let mut faces: Vec<([u32; 4], u32)> = (0..n)
         .into_par_iter()
         .flat_map_iter(|e| {
             let corners = elements.element(e);
             face_masks.iter().enumerate().map(move |(f, &mask)| {
-                let mut nodes: Vec<u32> = (0..corners.len())
-                    .filter(|c| mask & 1 << c != 0)
-                    .map(|c| corners[c])
-                    .collect();
+                let mut nodes = [u32::MAX; 4];
+                let on_face = (0..corners.len()).filter(|c| mask & 1 << c != 0);
+                for (slot, c) in nodes.iter_mut().zip(on_face) {
+                    *slot = corners[c];
+                }
                 nodes.sort_unstable();
                 (nodes, (e * face_masks.len() + f) as u32)
             })
@@ -209,7 +223,12 @@ fn boundary_faces(
             2 => stats.interior_faces += 1,
             count => {
                 return Err(TileError::NonConforming {
-                    nodes: faces[i].0.clone(),
+                    nodes: faces[i]
+                        .0
+                        .iter()
+                        .copied()
+                        .filter(|&v| v != u32::MAX)
+                        .collect(),
                     count,
                 });
             }
@@ -298,12 +317,30 @@ fn weld(
         let mask = a.mask() | b.map_or(0, |b| b.mask());
         if on_face(mask) {
             shared_index[i] = shared.len() as u32;
-            shared.push(SharedVertex { a, b });
+            shared.push(SharedVertex { a, b, caps: 0 });
+        }
+    }
+    // Vertices only caps use (inside lattice points on faces) exist in an element only where
+    // one of those caps is kept. Interior vertices are always on surface triangles.
+    let mut surface = vec![false; local.vertices.len()];
+    for t in &local.triangles {
+        for &v in t {
+            surface[v as usize] = true;
+        }
+    }
+    for (f, cap) in local.caps.iter().enumerate() {
+        for t in cap {
+            for &v in t {
+                if !surface[v as usize] {
+                    shared[shared_index[v as usize] as usize].caps |= 1 << f;
+                }
+            }
         }
     }
     let interior = local.vertices.len() - shared.len();
+    let used = |e: usize, s: &SharedVertex| s.caps == 0 || s.caps & boundary[e] != 0;
 
-    // Name every shared vertex of every element; equal names are one vertex, owned by the
+    // Name every shared vertex every element uses; equal names are one vertex, owned by the
     // lowest element.
     let mut names: Vec<(u128, u32, u32)> = (0..n)
         .into_par_iter()
@@ -312,15 +349,15 @@ fn weld(
             shared
                 .iter()
                 .enumerate()
+                .filter(move |(_, v)| used(e, v))
                 .map(move |(s, v)| (vertex_name(corners, v), e as u32, s as u32))
         })
         .collect();
     names.par_sort_unstable();
-    // group[e * shared.len() + s] = the group of element e's shared vertex s;
-    // owner flag where e is the group's first (lowest) element.
+    // role/group of element e's shared vertex s, at e * shared.len() + s.
     let per = shared.len();
     let mut group = vec![0u32; n * per];
-    let mut owns = vec![false; n * per];
+    let mut role = vec![Role::Unused; n * per];
     let mut groups = 0u32;
     for (r, &(name, e, s)) in names.iter().enumerate() {
         let first = r == 0 || names[r - 1].0 != name;
@@ -329,7 +366,7 @@ fn weld(
         }
         let slot = e as usize * per + s as usize;
         group[slot] = groups - 1;
-        owns[slot] = first;
+        role[slot] = if first { Role::Owner } else { Role::Borrower };
     }
     drop(names);
     let total = n as u64 * interior as u64 + u64::from(groups);
@@ -341,7 +378,8 @@ fn weld(
     // local order.
     let owned: Vec<u32> = (0..n)
         .map(|e| {
-            interior as u32 + owns[e * per..(e + 1) * per].iter().filter(|&&o| o).count() as u32
+            let roles = &role[e * per..(e + 1) * per];
+            interior as u32 + roles.iter().filter(|&&r| r == Role::Owner).count() as u32
         })
         .collect();
     let mut base = Vec::with_capacity(n + 1);
@@ -369,7 +407,7 @@ fn weld(
                 let s = shared_index[i];
                 if s != NONE {
                     let slot = e * per + s as usize;
-                    if !owns[slot] {
+                    if role[slot] != Role::Owner {
                         continue;
                     }
                     group_id[group[slot] as usize].store(next, Ordering::Relaxed);
@@ -391,8 +429,13 @@ fn weld(
                     let s = shared_index[i];
                     if s != NONE {
                         let slot = e * per + s as usize;
-                        if !owns[slot] {
-                            return group_id[group[slot] as usize].load(Ordering::Relaxed);
+                        match role[slot] {
+                            Role::Owner => {}
+                            // Only dropped caps use it: never referenced.
+                            Role::Unused => return u32::MAX,
+                            Role::Borrower => {
+                                return group_id[group[slot] as usize].load(Ordering::Relaxed);
+                            }
                         }
                     }
                     next += 1;

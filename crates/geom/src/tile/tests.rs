@@ -285,3 +285,21 @@ fn quadrature_fraction(field: &dyn ScalarField, shape: Element3, n: usize) -> f6
     }
     inside as f64 / total as f64
 }
+
+#[test]
+fn every_vertex_is_used_and_caps_only_on_the_boundary() {
+    // A solid that fills the cube's corners: caps on interior faces would put inside lattice
+    // points into the mesh; none may remain unreferenced, and the boundary area is exact.
+    let grid = Grid::new([2, 2, 1], [1.0, 1.0, 1.0]);
+    for shape in [Element3::Cube, Element3::Tetrahedron] {
+        let (mesh, _) = tile_grid(&grid, shape, &SchwarzP { offset: -0.5 }, 8);
+        let mut used = vec![false; mesh.vertices.len()];
+        for t in &mesh.triangles {
+            for &v in t {
+                used[v as usize] = true;
+            }
+        }
+        assert!(used.iter().all(|&u| u), "{shape:?}: unreferenced vertices");
+        assert_closed(&mesh);
+    }
+}
