@@ -4,8 +4,8 @@
 //! `cargo run --release -p latticebuild-geom --example tile_bench -- 100000 12`
 
 use latticebuild_geom::element::Element3;
-use latticebuild_geom::field::ScalarField;
-use latticebuild_geom::tile::{ElementMap, Elements, tile};
+use latticebuild_geom::field::{ScalarField, Solid};
+use latticebuild_geom::tile::{ElementMap, Elements, TiledSolid, tile};
 use std::time::Instant;
 
 struct SchwarzP;
@@ -92,7 +92,8 @@ fn main() {
         map: &maps,
     };
     let start = Instant::now();
-    match tile(&scaffold, &SchwarzP, resolution) {
+    let solid = TiledSolid::of(&SchwarzP, Solid::Inside { offset: 0.0 });
+    match tile(&scaffold, &solid, resolution) {
         Ok((mesh, stats)) => {
             let seconds = start.elapsed().as_secs_f64();
             println!(

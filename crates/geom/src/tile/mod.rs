@@ -31,15 +31,15 @@ mod cube;
 mod lattice;
 mod local;
 mod simplex;
+mod weld;
 
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU32, Ordering};
 
 use crate::element::Element3;
-use crate::field::ScalarField;
+use crate::field::{ScalarField, Solid};
 use crate::mesh::Mesh;
 use lattice::{Lattice, Weights};
-use local::{LocalMesh, POINT};
+use weld::{Locals, weld};
 
 pub use cube::HEX_CORNERS;
 
@@ -95,15 +95,73 @@ pub enum TileError {
         "a face (corner nodes {nodes:?}) is shared by {count} elements; a conforming scaffold shares each face between at most two"
     )]
     NonConforming { nodes: Vec<u32>, count: usize },
+    #[error("{what} values are given for {given} nodes, but the scaffold has {nodes}")]
+    NodalValues {
+        what: &'static str,
+        given: usize,
+        nodes: usize,
+    },
     #[error("the mesh would have {0} vertices, more than 32-bit indices can address")]
     TooManyVertices(u64),
 }
 
-/// Tiles `field` (the solid's implicit function in reference coordinates, negative inside,
-/// with the element's symmetry) into every element, with `resolution` samples per element edge.
+/// What is tiled into every element: a cell (or a transition between two), in reference
+/// coordinates and with the element's symmetry, seen through a solid whose thickness or offset
+/// may be graded. Nodal arrays are indexed by global node id (the ids in
+/// [`Elements::corners`]) and interpolated with the element's corner (linear) shape functions,
+/// which on a face involve only that face's corners: graded values are continuous across
+/// faces, and bitwise equal on them.
+pub struct TiledSolid<'a> {
+    /// The cell field, and a second one for a transition.
+    pub cell: &'a dyn ScalarField,
+    pub transition: Option<Transition<'a>>,
+    pub solid: Solid,
+    /// Per node: the shell thickness (replacing the solid's own; shells only).
+    pub thickness: Option<&'a [f64]>,
+    /// Per node: the offset (replacing the solid's own; every solid but a plain shell).
+    pub offset: Option<&'a [f64]>,
+}
+
+/// `Φ = (1 − w) Φ_cell + w Φ_to`, with `w` the weight of `to` at each node.
+pub struct Transition<'a> {
+    pub to: &'a dyn ScalarField,
+    pub weight: &'a [f64],
+}
+
+impl TiledSolid<'_> {
+    /// The plain solid of one cell.
+    pub fn of(cell: &dyn ScalarField, solid: Solid) -> TiledSolid<'_> {
+        TiledSolid {
+            cell,
+            transition: None,
+            solid,
+            thickness: None,
+            offset: None,
+        }
+    }
+
+    fn is_uniform(&self) -> bool {
+        self.transition.is_none() && self.thickness.is_none() && self.offset.is_none()
+    }
+
+    fn nodal(&self) -> impl Iterator<Item = (&'static str, &[f64])> {
+        [
+            (
+                "transition weight",
+                self.transition.as_ref().map(|t| t.weight),
+            ),
+            ("thickness", self.thickness),
+            ("offset", self.offset),
+        ]
+        .into_iter()
+        .filter_map(|(what, v)| v.map(|v| (what, v)))
+    }
+}
+
+/// Tiles `solid` into every element, with `resolution` samples per element edge.
 pub fn tile(
     elements: &Elements,
-    field: &dyn ScalarField,
+    solid: &TiledSolid,
     resolution: usize,
 ) -> Result<(Mesh, TileStats), TileError> {
     if resolution < 2 {
@@ -119,13 +177,101 @@ pub fn tile(
             per_element,
         });
     }
+    let nodes = elements
+        .corners
+        .iter()
+        .map(|&c| c as usize + 1)
+        .max()
+        .unwrap_or(0);
+    for (what, values) in solid.nodal() {
+        if values.len() < nodes {
+            return Err(TileError::NodalValues {
+                what,
+                given: values.len(),
+                nodes,
+            });
+        }
+    }
     let lattice: Box<dyn Lattice> = match elements.shape {
         Element3::Cube => Box::new(cube::CubeLattice::new(resolution)),
         Element3::Tetrahedron => Box::new(simplex::TetLattice::new(resolution)),
     };
-    let values = symmetric_samples(lattice.as_ref(), field);
-    let local = lattice.contour(&values);
-    weld(elements, lattice.as_ref(), &local)
+    let lattice = lattice.as_ref();
+    let cell = symmetric_samples(lattice, solid.cell);
+    if solid.is_uniform() {
+        let values: Vec<f64> = cell.iter().map(|&v| solid.solid.apply(v)).collect();
+        let local = lattice.contour(&values);
+        return weld(elements, lattice, Locals::Uniform(&local));
+    }
+    let to = solid
+        .transition
+        .as_ref()
+        .map(|t| symmetric_samples(lattice, t.to));
+    let weights: Vec<Option<Weights>> = (0..lattice.index_len() as u32)
+        .map(|p| lattice.is_point(p).then(|| lattice.weights(p)))
+        .collect();
+    let locals: Vec<local::LocalMesh> = (0..elements.count())
+        .into_par_iter()
+        .map_init(
+            || vec![f64::NAN; lattice.index_len()],
+            |values, e| {
+                let corners = elements.element(e);
+                for (p, w) in weights.iter().enumerate() {
+                    let Some(w) = w else { continue };
+                    let at = |nodal: &[f64]| interpolate(corners, w, nodal);
+                    let mut phi = cell[p];
+                    if let (Some(t), Some(to)) = (&solid.transition, &to) {
+                        let w = at(t.weight);
+                        phi = (1.0 - w) * phi + w * to[p];
+                    }
+                    let graded =
+                        graded_solid(solid.solid, solid.thickness.map(at), solid.offset.map(at));
+                    values[p] = graded.apply(phi);
+                }
+                lattice.contour(values)
+            },
+        )
+        .collect();
+    weld(elements, lattice, Locals::PerElement(&locals))
+}
+
+/// A nodal value at a lattice point: `Σ W_c v(node_c) / Σ W_c` over the point's corner
+/// weights, summed in increasing node order so both elements sharing a face compute the same
+/// bits there.
+fn interpolate(corners: &[u32], weights: &Weights, nodal: &[f64]) -> f64 {
+    let mut terms = [(u32::MAX, 0u32); lattice::MAX_CORNERS];
+    let list = weights.as_slice();
+    for (slot, &(c, w)) in terms.iter_mut().zip(list) {
+        *slot = (corners[c as usize], w);
+    }
+    let terms = &mut terms[..list.len()];
+    terms.sort_unstable();
+    let (sum, total) = terms.iter().fold((0.0, 0u32), |(s, t), &(node, w)| {
+        (s + f64::from(w) * nodal[node as usize], t + w)
+    });
+    sum / f64::from(total)
+}
+
+/// The solid with its thickness or offset replaced by graded values where given.
+fn graded_solid(solid: Solid, thickness: Option<f64>, offset: Option<f64>) -> Solid {
+    match solid {
+        Solid::Inside { offset: o } => Solid::Inside {
+            offset: offset.unwrap_or(o),
+        },
+        Solid::Outside { offset: o } => Solid::Outside {
+            offset: offset.unwrap_or(o),
+        },
+        Solid::Shell { thickness: t } => Solid::Shell {
+            thickness: thickness.unwrap_or(t),
+        },
+        Solid::EccentricShell {
+            offset: o,
+            thickness: t,
+        } => Solid::EccentricShell {
+            offset: offset.unwrap_or(o),
+            thickness: thickness.unwrap_or(t),
+        },
+    }
 }
 
 /// The field at every lattice point, evaluated at its orbit's representative only.
@@ -160,309 +306,6 @@ fn symmetric_samples(lattice: &dyn Lattice, field: &dyn ScalarField) -> Vec<f64>
             }
         })
         .collect()
-}
-
-/// A local vertex on the element boundary: the weights of its lattice ends, and the faces
-/// whose caps alone use it (0 when surface triangles use it).
-struct SharedVertex {
-    a: Weights,
-    b: Option<Weights>,
-    caps: u8,
-}
-
-/// What an element does with one of its shared vertices.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Role {
-    /// Only caps on interior faces use it: it is not in the output.
-    Unused,
-    /// The lowest element using it: it places and numbers it.
-    Owner,
-    /// Another element owns it.
-    Borrower,
-}
-
-/// Which faces of each element lie on the scaffold boundary (one bit per face).
-fn boundary_faces(
-    elements: &Elements,
-    face_masks: &[u8],
-) -> Result<(Vec<u8>, TileStats), TileError> {
-    let n = elements.count();
-    let mut faces: Vec<([u32; 4], u32)> = (0..n)
-        .into_par_iter()
-        .flat_map_iter(|e| {
-            let corners = elements.element(e);
-            face_masks.iter().enumerate().map(move |(f, &mask)| {
-                let mut nodes = [u32::MAX; 4];
-                let on_face = (0..corners.len()).filter(|c| mask & 1 << c != 0);
-                for (slot, c) in nodes.iter_mut().zip(on_face) {
-                    *slot = corners[c];
-                }
-                nodes.sort_unstable();
-                (nodes, (e * face_masks.len() + f) as u32)
-            })
-        })
-        .collect();
-    faces.par_sort_unstable();
-    let mut boundary = vec![0u8; n];
-    let mut stats = TileStats {
-        elements: n,
-        ..TileStats::default()
-    };
-    let mut i = 0;
-    while i < faces.len() {
-        let mut j = i + 1;
-        while j < faces.len() && faces[j].0 == faces[i].0 {
-            j += 1;
-        }
-        match j - i {
-            1 => {
-                let slot = faces[i].1 as usize;
-                boundary[slot / face_masks.len()] |= 1 << (slot % face_masks.len());
-                stats.boundary_faces += 1;
-            }
-            2 => stats.interior_faces += 1,
-            count => {
-                return Err(TileError::NonConforming {
-                    nodes: faces[i]
-                        .0
-                        .iter()
-                        .copied()
-                        .filter(|&v| v != u32::MAX)
-                        .collect(),
-                    count,
-                });
-            }
-        }
-        i = j;
-    }
-    Ok((boundary, stats))
-}
-
-/// 128-bit name of a shared vertex in element `corners`: its ends' `(global node, weight)`
-/// lists, sorted by node and put in a fixed order. Collisions between distinct names are
-/// as likely as for any 128-bit hash of a few million keys (about 2⁻⁸⁰): not a concern.
-fn vertex_name(corners: &[u32], v: &SharedVertex) -> u128 {
-    let list = |w: &Weights| {
-        let mut out = [(u32::MAX, 0u32); 4];
-        for (k, &(c, weight)) in w.as_slice().iter().enumerate() {
-            out[k] = (corners[c as usize], weight);
-        }
-        out.sort_unstable();
-        out
-    };
-    let a = list(&v.a);
-    let mut h = Hasher128::new(u64::from(v.b.is_some()));
-    match &v.b {
-        None => a
-            .iter()
-            .for_each(|&(n, w)| h.add(u64::from(n) << 32 | u64::from(w))),
-        Some(b) => {
-            let b = list(b);
-            let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
-            for &(n, w) in lo.iter().chain(hi.iter()) {
-                h.add(u64::from(n) << 32 | u64::from(w));
-            }
-        }
-    }
-    h.finish()
-}
-
-/// Two independent 64-bit multiply–xorshift lanes.
-struct Hasher128 {
-    lo: u64,
-    hi: u64,
-}
-
-impl Hasher128 {
-    fn new(seed: u64) -> Hasher128 {
-        Hasher128 {
-            lo: 0x9E37_79B9_7F4A_7C15 ^ seed,
-            hi: 0xC2B2_AE3D_27D4_EB4F ^ seed.rotate_left(17),
-        }
-    }
-
-    #[inline]
-    fn add(&mut self, x: u64) {
-        self.lo = (self.lo ^ x).wrapping_mul(0xFF51_AFD7_ED55_8CCD);
-        self.lo ^= self.lo >> 33;
-        self.hi = (self.hi ^ x.rotate_left(29)).wrapping_mul(0xC4CE_B9FE_1A85_EC53);
-        self.hi ^= self.hi >> 29;
-    }
-
-    fn finish(mut self) -> u128 {
-        self.add(0x2545_F491_4F6C_DD1D);
-        u128::from(self.hi) << 64 | u128::from(self.lo)
-    }
-}
-
-fn weld(
-    elements: &Elements,
-    lattice: &dyn Lattice,
-    local: &LocalMesh,
-) -> Result<(Mesh, TileStats), TileError> {
-    let face_masks = lattice.face_masks();
-    let (boundary, stats) = boundary_faces(elements, face_masks)?;
-    let n = elements.count();
-
-    // Local vertices on the element's boundary: those whose lattice edge (or point) lies in
-    // one face, i.e. whose corner support is inside a face's corners.
-    let on_face = |mask: u8| face_masks.iter().any(|&f| mask & !f == 0);
-    let mut shared: Vec<SharedVertex> = Vec::new();
-    // For each local vertex: its index in `shared`, or NONE for interior vertices.
-    const NONE: u32 = u32::MAX;
-    let mut shared_index = vec![NONE; local.vertices.len()];
-    for (i, v) in local.vertices.iter().enumerate() {
-        let a = lattice.weights(v.a);
-        let b = (v.b != POINT).then(|| lattice.weights(v.b));
-        let mask = a.mask() | b.map_or(0, |b| b.mask());
-        if on_face(mask) {
-            shared_index[i] = shared.len() as u32;
-            shared.push(SharedVertex { a, b, caps: 0 });
-        }
-    }
-    // Vertices only caps use (inside lattice points on faces) exist in an element only where
-    // one of those caps is kept. Interior vertices are always on surface triangles.
-    let mut surface = vec![false; local.vertices.len()];
-    for t in &local.triangles {
-        for &v in t {
-            surface[v as usize] = true;
-        }
-    }
-    for (f, cap) in local.caps.iter().enumerate() {
-        for t in cap {
-            for &v in t {
-                if !surface[v as usize] {
-                    shared[shared_index[v as usize] as usize].caps |= 1 << f;
-                }
-            }
-        }
-    }
-    let interior = local.vertices.len() - shared.len();
-    let used = |e: usize, s: &SharedVertex| s.caps == 0 || s.caps & boundary[e] != 0;
-
-    // Name every shared vertex every element uses; equal names are one vertex, owned by the
-    // lowest element.
-    let mut names: Vec<(u128, u32, u32)> = (0..n)
-        .into_par_iter()
-        .flat_map_iter(|e| {
-            let corners = elements.element(e);
-            shared
-                .iter()
-                .enumerate()
-                .filter(move |(_, v)| used(e, v))
-                .map(move |(s, v)| (vertex_name(corners, v), e as u32, s as u32))
-        })
-        .collect();
-    names.par_sort_unstable();
-    // role/group of element e's shared vertex s, at e * shared.len() + s.
-    let per = shared.len();
-    let mut group = vec![0u32; n * per];
-    let mut role = vec![Role::Unused; n * per];
-    let mut groups = 0u32;
-    for (r, &(name, e, s)) in names.iter().enumerate() {
-        let first = r == 0 || names[r - 1].0 != name;
-        if first {
-            groups += 1;
-        }
-        let slot = e as usize * per + s as usize;
-        group[slot] = groups - 1;
-        role[slot] = if first { Role::Owner } else { Role::Borrower };
-    }
-    drop(names);
-    let total = n as u64 * interior as u64 + u64::from(groups);
-    if total > u64::from(u32::MAX) {
-        return Err(TileError::TooManyVertices(total));
-    }
-
-    // Vertex ids: element by element, its interior vertices and the shared ones it owns, in
-    // local order.
-    let owned: Vec<u32> = (0..n)
-        .map(|e| {
-            let roles = &role[e * per..(e + 1) * per];
-            interior as u32 + roles.iter().filter(|&&r| r == Role::Owner).count() as u32
-        })
-        .collect();
-    let mut base = Vec::with_capacity(n + 1);
-    base.push(0u32);
-    for &c in &owned {
-        base.push(base.last().copied().unwrap_or(0) + c);
-    }
-    let group_id: Vec<AtomicU32> = (0..groups).map(|_| AtomicU32::new(0)).collect();
-    let xi_of = |v: &local::LocalVertex| {
-        let a = lattice.xi(v.a);
-        if v.b == POINT {
-            a
-        } else {
-            let b = lattice.xi(v.b);
-            std::array::from_fn(|k| a[k] + v.t * (b[k] - a[k]))
-        }
-    };
-    let ref_xi: Vec<[f64; 3]> = local.vertices.iter().map(xi_of).collect();
-    let positions: Vec<Vec<[f32; 3]>> = (0..n)
-        .into_par_iter()
-        .map(|e| {
-            let mut next = base[e];
-            let mut out = Vec::with_capacity(owned[e] as usize);
-            for (i, xi) in ref_xi.iter().enumerate() {
-                let s = shared_index[i];
-                if s != NONE {
-                    let slot = e * per + s as usize;
-                    if role[slot] != Role::Owner {
-                        continue;
-                    }
-                    group_id[group[slot] as usize].store(next, Ordering::Relaxed);
-                }
-                next += 1;
-                out.push(elements.map.map(e, *xi).map(|c| c as f32));
-            }
-            out
-        })
-        .collect();
-    let vertices: Vec<[f32; 3]> = positions.into_iter().flatten().collect();
-
-    let triangles: Vec<Vec<[u32; 3]>> = (0..n)
-        .into_par_iter()
-        .map(|e| {
-            let mut next = base[e];
-            let ids: Vec<u32> = (0..local.vertices.len())
-                .map(|i| {
-                    let s = shared_index[i];
-                    if s != NONE {
-                        let slot = e * per + s as usize;
-                        match role[slot] {
-                            Role::Owner => {}
-                            // Only dropped caps use it: never referenced.
-                            Role::Unused => return u32::MAX,
-                            Role::Borrower => {
-                                return group_id[group[slot] as usize].load(Ordering::Relaxed);
-                            }
-                        }
-                    }
-                    next += 1;
-                    next - 1
-                })
-                .collect();
-            let mut out: Vec<[u32; 3]> = local
-                .triangles
-                .iter()
-                .map(|t| t.map(|v| ids[v as usize]))
-                .collect();
-            for (f, cap) in local.caps.iter().enumerate() {
-                if boundary[e] & 1 << f != 0 {
-                    out.extend(cap.iter().map(|t| t.map(|v| ids[v as usize])));
-                }
-            }
-            out
-        })
-        .collect();
-    let triangles = triangles.into_iter().flatten().collect();
-    Ok((
-        Mesh {
-            vertices,
-            triangles,
-        },
-        stats,
-    ))
 }
 
 #[cfg(test)]

@@ -154,6 +154,15 @@ impl ElementMap for Maps<'_> {
 }
 
 fn tile_grid(grid: &Grid, shape: Element3, field: &dyn ScalarField, n: usize) -> (Mesh, TileStats) {
+    tile_solid(
+        grid,
+        shape,
+        &TiledSolid::of(field, Solid::Inside { offset: 0.0 }),
+        n,
+    )
+}
+
+fn tile_solid(grid: &Grid, shape: Element3, solid: &TiledSolid, n: usize) -> (Mesh, TileStats) {
     let corners = match shape {
         Element3::Cube => grid.hexes(),
         Element3::Tetrahedron => grid.tets(),
@@ -168,7 +177,7 @@ fn tile_grid(grid: &Grid, shape: Element3, field: &dyn ScalarField, n: usize) ->
         corners: &corners,
         map: &maps,
     };
-    match tile(&elements, field, n) {
+    match tile(&elements, solid, n) {
         Ok(out) => out,
         Err(e) => panic!("tiling failed: {e}"),
     }
@@ -302,4 +311,127 @@ fn every_vertex_is_used_and_caps_only_on_the_boundary() {
         assert!(used.iter().all(|&u| u), "{shape:?}: unreferenced vertices");
         assert_closed(&mesh);
     }
+}
+
+/// A ball about the element's centre, `|ξ|² − r²` (every symmetry of both elements).
+struct Ball {
+    r: f64,
+}
+
+impl ScalarField for Ball {
+    fn eval_points(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
+        for i in 0..out.len() {
+            out[i] = xs[i] * xs[i] + ys[i] * ys[i] + zs[i] * zs[i] - self.r * self.r;
+        }
+    }
+}
+
+/// Half of P plus half of a ball, as one field.
+struct Mix;
+
+impl ScalarField for Mix {
+    fn eval_points(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
+        let (mut p, mut b) = (vec![0.0; out.len()], vec![0.0; out.len()]);
+        SchwarzP { offset: 0.0 }.eval_points(xs, ys, zs, &mut p);
+        Ball { r: 0.3 }.eval_points(xs, ys, zs, &mut b);
+        for i in 0..out.len() {
+            out[i] = 0.5 * p[i] + 0.5 * b[i];
+        }
+    }
+}
+
+#[test]
+fn transitions_and_graded_shells_stay_closed() {
+    let mut grid = Grid::new([4, 2, 2], [1.0, 1.0, 1.0]);
+    for p in grid.nodes.iter_mut() {
+        p[1] += 0.1 * (p[0] * 2.0).sin();
+    }
+    // Weight of the ball rises along x; the shell thickens along z.
+    let weight: Vec<f64> = grid.nodes.iter().map(|p| p[0] / 4.0).collect();
+    let thickness: Vec<f64> = grid.nodes.iter().map(|p| 0.2 + 0.3 * p[2]).collect();
+    let (p, ball) = (SchwarzP { offset: 0.0 }, Ball { r: 0.35 });
+    for shape in [Element3::Cube, Element3::Tetrahedron] {
+        let blend = TiledSolid {
+            transition: Some(Transition {
+                to: &ball,
+                weight: &weight,
+            }),
+            ..TiledSolid::of(&p, Solid::Inside { offset: 0.0 })
+        };
+        let (mesh, _) = tile_solid(&grid, shape, &blend, 10);
+        assert_closed(&mesh);
+        let graded = TiledSolid {
+            thickness: Some(&thickness),
+            ..TiledSolid::of(&p, Solid::Shell { thickness: 0.0 })
+        };
+        let (mesh, _) = tile_solid(&grid, shape, &graded, 10);
+        assert_closed(&mesh);
+    }
+}
+
+#[test]
+fn a_constant_transition_is_the_mixed_cell() {
+    // w = ½ everywhere: the per-element path must give the uniform path's solid.
+    let grid = Grid::new([2, 2, 1], [1.0, 1.0, 1.0]);
+    let half = vec![0.5; grid.nodes.len()];
+    let (p, ball) = (SchwarzP { offset: 0.0 }, Ball { r: 0.3 });
+    for shape in [Element3::Cube, Element3::Tetrahedron] {
+        let blend = TiledSolid {
+            transition: Some(Transition {
+                to: &ball,
+                weight: &half,
+            }),
+            ..TiledSolid::of(&p, Solid::Inside { offset: 0.0 })
+        };
+        let blended = assert_closed(&tile_solid(&grid, shape, &blend, 12).0);
+        let mixed = assert_closed(&tile_grid(&grid, shape, &Mix, 12).0);
+        assert!(
+            (blended - mixed).abs() < 1e-6 * mixed,
+            "{shape:?}: {blended} vs {mixed}"
+        );
+    }
+}
+
+#[test]
+fn a_graded_offset_matches_the_uniform_one_where_constant() {
+    let grid = Grid::new([2, 1, 1], [1.0, 1.0, 1.0]);
+    let offsets = vec![0.4; grid.nodes.len()];
+    let p = SchwarzP { offset: 0.0 };
+    let graded = TiledSolid {
+        offset: Some(&offsets),
+        ..TiledSolid::of(&p, Solid::Inside { offset: 0.0 })
+    };
+    let a = assert_closed(&tile_solid(&grid, Element3::Cube, &graded, 12).0);
+    let b = assert_closed(&tile_grid(&grid, Element3::Cube, &SchwarzP { offset: 0.4 }, 12).0);
+    assert!((a - b).abs() < 1e-6 * b, "{a} vs {b}");
+}
+
+#[test]
+fn short_nodal_arrays_are_an_error() {
+    let grid = Grid::new([1, 1, 1], [1.0, 1.0, 1.0]);
+    let corners = grid.hexes();
+    let maps = Maps {
+        nodes: &grid.nodes,
+        corners: &corners,
+        shape: Element3::Cube,
+    };
+    let elements = Elements {
+        shape: Element3::Cube,
+        corners: &corners,
+        map: &maps,
+    };
+    let short = vec![0.1; 3];
+    let p = SchwarzP { offset: 0.0 };
+    let solid = TiledSolid {
+        thickness: Some(&short),
+        ..TiledSolid::of(&p, Solid::Shell { thickness: 0.1 })
+    };
+    assert_eq!(
+        tile(&elements, &solid, 4).map(|_| ()),
+        Err(TileError::NodalValues {
+            what: "thickness",
+            given: 3,
+            nodes: 8
+        })
+    );
 }
