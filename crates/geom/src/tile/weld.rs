@@ -167,6 +167,8 @@ struct Classified {
     /// Per local vertex: its index in `shared`, or [`NONE`] for interior vertices.
     shared_index: Vec<u32>,
     shared: Vec<SharedVertex>,
+    /// Per local vertex: its reference coordinates.
+    xi: Vec<[f64; 3]>,
 }
 
 const NONE: u32 = u32::MAX;
@@ -208,6 +210,11 @@ impl Classified {
         Classified {
             shared_index,
             shared,
+            xi: local
+                .vertices
+                .iter()
+                .map(|v| reference_point(lattice, v))
+                .collect(),
         }
     }
 }
@@ -292,10 +299,10 @@ pub fn weld(
     let positions: Vec<Vec<[f32; 3]>> = (0..n)
         .into_par_iter()
         .map(|e| {
-            let (local, c) = (locals.get(e), class(e));
+            let c = class(e);
             let mut next = base[e] as u32;
             let mut out = Vec::with_capacity(owned[e] as usize);
-            for (i, v) in local.vertices.iter().enumerate() {
+            for (i, xi) in c.xi.iter().enumerate() {
                 let s = c.shared_index[i];
                 if s != NONE {
                     let slot = slot_base[e] + s as usize;
@@ -305,12 +312,7 @@ pub fn weld(
                     group_id[group[slot] as usize].store(next, Ordering::Relaxed);
                 }
                 next += 1;
-                out.push(
-                    elements
-                        .map
-                        .map(e, reference_point(lattice, v))
-                        .map(|c| c as f32),
-                );
+                out.push(elements.map.map(e, *xi).map(|c| c as f32));
             }
             out
         })
