@@ -30,6 +30,7 @@
 mod cube;
 mod lattice;
 mod local;
+mod scaffold;
 mod simplex;
 mod weld;
 
@@ -42,6 +43,7 @@ use lattice::{Lattice, Weights};
 use weld::{Locals, weld};
 
 pub use cube::HEX_CORNERS;
+pub use scaffold::{reference_element, tile_scaffold};
 
 /// The isoparametric maps of a scaffold's elements.
 pub trait ElementMap: Sync {
@@ -101,6 +103,8 @@ pub enum TileError {
         given: usize,
         nodes: usize,
     },
+    #[error("{0} scaffolds are surfaces; only volume scaffolds (tet, hex) are tiled so far")]
+    NotVolume(&'static str),
     #[error("the mesh would have {0} vertices, more than 32-bit indices can address")]
     TooManyVertices(u64),
 }
@@ -203,36 +207,60 @@ pub fn tile(
         let local = lattice.contour(&values);
         return weld(elements, lattice, Locals::Uniform(&local));
     }
-    let to = solid
-        .transition
-        .as_ref()
-        .map(|t| symmetric_samples(lattice, t.to));
-    let weights: Vec<Option<Weights>> = (0..lattice.index_len() as u32)
-        .map(|p| lattice.is_point(p).then(|| lattice.weights(p)))
-        .collect();
+    let samples = ElementSamples::new(lattice, solid, cell);
     let locals: Vec<local::LocalMesh> = (0..elements.count())
         .into_par_iter()
         .map_init(
             || vec![f64::NAN; lattice.index_len()],
             |values, e| {
-                let corners = elements.element(e);
-                for (p, w) in weights.iter().enumerate() {
-                    let Some(w) = w else { continue };
-                    let at = |nodal: &[f64]| interpolate(corners, w, nodal);
-                    let mut phi = cell[p];
-                    if let (Some(t), Some(to)) = (&solid.transition, &to) {
-                        let w = at(t.weight);
-                        phi = (1.0 - w) * phi + w * to[p];
-                    }
-                    let graded =
-                        graded_solid(solid.solid, solid.thickness.map(at), solid.offset.map(at));
-                    values[p] = graded.apply(phi);
-                }
+                samples.fill(elements.element(e), values);
                 lattice.contour(values)
             },
         )
         .collect();
     weld(elements, lattice, Locals::PerElement(&locals))
+}
+
+/// The samples of a graded or transition solid in one element, from the symmetric reference
+/// samples of its cells and the nodal values at the element's corners.
+struct ElementSamples<'s> {
+    solid: &'s TiledSolid<'s>,
+    cell: Vec<f64>,
+    to: Option<Vec<f64>>,
+    /// Per lattice index: the point's corner weights (None off the lattice).
+    weights: Vec<Option<Weights>>,
+}
+
+impl<'s> ElementSamples<'s> {
+    fn new(lattice: &dyn Lattice, solid: &'s TiledSolid<'s>, cell: Vec<f64>) -> Self {
+        ElementSamples {
+            solid,
+            cell,
+            to: solid
+                .transition
+                .as_ref()
+                .map(|t| symmetric_samples(lattice, t.to)),
+            weights: (0..lattice.index_len() as u32)
+                .map(|p| lattice.is_point(p).then(|| lattice.weights(p)))
+                .collect(),
+        }
+    }
+
+    /// The samples of the element with corner nodes `corners` into `values`.
+    fn fill(&self, corners: &[u32], values: &mut [f64]) {
+        let solid = self.solid;
+        for (p, w) in self.weights.iter().enumerate() {
+            let Some(w) = w else { continue };
+            let at = |nodal: &[f64]| interpolate(corners, w, nodal);
+            let mut phi = self.cell[p];
+            if let (Some(t), Some(to)) = (&solid.transition, &self.to) {
+                let w = at(t.weight);
+                phi = (1.0 - w) * phi + w * to[p];
+            }
+            let graded = graded_solid(solid.solid, solid.thickness.map(at), solid.offset.map(at));
+            values[p] = graded.apply(phi);
+        }
+    }
 }
 
 /// A nodal value at a lattice point: `Σ W_c v(node_c) / Σ W_c` over the point's corner

@@ -435,3 +435,91 @@ fn short_nodal_arrays_are_an_error() {
         })
     );
 }
+
+/// The continuity statement itself, on real Gmsh meshes with graded and transition fields:
+/// every lattice point on a face shared by two elements has bitwise the same sample from both.
+#[test]
+fn shared_face_samples_are_bitwise_equal_from_both_sides() {
+    use crate::scaffold::read_scaffold;
+    use std::collections::HashMap;
+    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/scaffolds");
+    let read = |name: &str| {
+        let bytes = std::fs::read(dir.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        read_scaffold(&bytes, name, None).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let (p, ball) = (SchwarzP { offset: 0.2 }, Ball { r: 0.3 });
+    for (file, resolution) in [
+        ("bracket_tet4_weight.msh", 7),
+        ("sphere_r10_tet10.msh", 6),
+        ("cylinder_r5h20_hex8.msh", 6),
+        ("cylinder_r5h20_hex27.msh", 5),
+    ] {
+        let scaffold = read(file);
+        let shape = reference_element(scaffold.kind).unwrap_or_else(|| panic!("{file}"));
+        let weight: Vec<f64> = scaffold
+            .nodes
+            .iter()
+            .map(|x| (0.05 * x[0]).sin().abs())
+            .collect();
+        let thickness: Vec<f64> = scaffold.nodes.iter().map(|x| 0.5 + 0.02 * x[2]).collect();
+        let solid = TiledSolid {
+            transition: Some(Transition {
+                to: &ball,
+                weight: &weight,
+            }),
+            thickness: Some(&thickness),
+            ..TiledSolid::of(
+                &p,
+                Solid::EccentricShell {
+                    offset: 0.1,
+                    thickness: 0.0,
+                },
+            )
+        };
+        let lattice: Box<dyn Lattice> = match shape {
+            Element3::Cube => Box::new(cube::CubeLattice::new(resolution)),
+            Element3::Tetrahedron => Box::new(simplex::TetLattice::new(resolution)),
+        };
+        let lattice = lattice.as_ref();
+        let samples = ElementSamples::new(lattice, &solid, symmetric_samples(lattice, &p));
+        let (per, corners) = (scaffold.kind.node_count(), scaffold.kind.corner_count());
+        let mut seen: HashMap<Vec<(u32, u32)>, (u64, usize)> = HashMap::new();
+        let mut values = vec![f64::NAN; lattice.index_len()];
+        let (mut compared, mut faces_seen) = (0usize, 0usize);
+        for (e, element) in scaffold.connectivity.chunks_exact(per).enumerate() {
+            let corner_nodes = &element[..corners];
+            samples.fill(corner_nodes, &mut values);
+            for q in 0..lattice.index_len() as u32 {
+                if !lattice.is_point(q) {
+                    continue;
+                }
+                let w = lattice.weights(q);
+                if !lattice.face_masks().iter().any(|&f| w.mask() & !f == 0) {
+                    continue;
+                }
+                let mut name: Vec<(u32, u32)> = w
+                    .as_slice()
+                    .iter()
+                    .map(|&(c, k)| (corner_nodes[c as usize], k))
+                    .collect();
+                name.sort_unstable();
+                let bits = values[q as usize].to_bits();
+                match seen.get(&name) {
+                    Some(&(other, from)) if from != e => {
+                        compared += 1;
+                        assert_eq!(bits, other, "{file}: elements {from} and {e} at {name:?}");
+                    }
+                    Some(_) => {}
+                    None => {
+                        faces_seen += 1;
+                        seen.insert(name, (bits, e));
+                    }
+                }
+            }
+        }
+        assert!(
+            compared > faces_seen / 2,
+            "{file}: only {compared} comparisons"
+        );
+    }
+}
