@@ -1,11 +1,13 @@
-//! Tiling throughput: a structured grid split into tetrahedra (about `--elements` of them)
-//! tiled with Schwarz P at a given resolution; prints triangles per second.
+//! Tiling throughput: Schwarz P tiled at a given resolution into a scaffold file, or into a
+//! structured grid split into about N tetrahedra; prints triangles per second.
 //!
 //! `cargo run --release -p latticebuild-geom --example tile_bench -- 100000 12`
+//! `cargo run --release -p latticebuild-geom --example tile_bench -- bracket.msh 12`
 
 use latticebuild_geom::element::Element3;
 use latticebuild_geom::field::{ScalarField, Solid};
-use latticebuild_geom::tile::{ElementMap, Elements, TiledSolid, tile};
+use latticebuild_geom::scaffold::read_scaffold;
+use latticebuild_geom::tile::{ElementMap, Elements, TiledSolid, tile, tile_scaffold};
 use std::time::Instant;
 
 struct SchwarzP;
@@ -42,6 +44,10 @@ impl ElementMap for Affine<'_> {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
+    if let Some(path) = args.get(1).filter(|a| a.parse::<usize>().is_err()) {
+        let resolution: usize = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(12);
+        return tile_file(path, resolution);
+    }
     let elements: usize = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(100_000);
     let resolution: usize = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(12);
     let d = ((elements as f64 / 6.0).cbrt().round() as usize).max(1);
@@ -114,4 +120,30 @@ fn left_handed(x: &[[f64; 3]]) -> bool {
     a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
         + a[2] * (b[0] * c[1] - b[1] * c[0])
         < 0.0
+}
+
+fn tile_file(path: &str, resolution: usize) {
+    let read = Instant::now();
+    let scaffold = match std::fs::read(path).map_err(|e| e.to_string()).and_then(|bytes| {
+        read_scaffold(&bytes, path, None).map_err(|e| e.to_string())
+    }) {
+        Ok(s) => s,
+        Err(e) => return eprintln!("{e}"),
+    };
+    let read = read.elapsed().as_secs_f64();
+    let solid = TiledSolid::of(&SchwarzP, Solid::Inside { offset: 0.0 });
+    let start = Instant::now();
+    match tile_scaffold(&scaffold, &solid, resolution) {
+        Ok((mesh, stats)) => {
+            let seconds = start.elapsed().as_secs_f64();
+            println!(
+                "{path}: {} {} elements (read in {read:.2} s), resolution {resolution}: {} triangles in {seconds:.3} s = {:.2} M triangles/s",
+                stats.elements,
+                scaffold.kind.name(),
+                mesh.triangles.len(),
+                mesh.triangles.len() as f64 / seconds / 1e6
+            );
+        }
+        Err(e) => eprintln!("tiling failed: {e}"),
+    }
 }
