@@ -3,6 +3,7 @@
 //! values; determinism.
 
 use super::*;
+use crate::scaffold::{ElementKind, Scaffold, grid};
 use crate::validate::check;
 
 /// The implicit function of Schwarz P, `cos 2πx + cos 2πy + cos 2πz` (Oh, hence Td).
@@ -19,7 +20,8 @@ impl ScalarField for SchwarzP {
     }
 }
 
-/// A structured grid of `d` hexahedra of size `h`, and its tetrahedral split.
+/// Node positions of a structured grid of `d` boxes of size `h` (x fastest, then y, then z:
+/// the order of [`crate::scaffold::grid`]'s nodes), which tests may move.
 struct Grid {
     d: [usize; 3],
     h: [f64; 3],
@@ -28,128 +30,29 @@ struct Grid {
 
 impl Grid {
     fn new(d: [usize; 3], h: [f64; 3]) -> Grid {
-        let mut nodes = Vec::new();
-        for k in 0..=d[2] {
-            for j in 0..=d[1] {
-                for i in 0..=d[0] {
-                    nodes.push([i as f64 * h[0], j as f64 * h[1], k as f64 * h[2]]);
-                }
-            }
-        }
+        let nodes = Self::scaffold_of(d, h, ElementKind::Hex8).nodes;
         Grid { d, h, nodes }
     }
 
-    fn node(&self, [i, j, k]: [usize; 3]) -> u32 {
-        (i + (self.d[0] + 1) * (j + (self.d[1] + 1) * k)) as u32
+    fn scaffold_of(d: [usize; 3], h: [f64; 3], kind: ElementKind) -> Scaffold {
+        let max = std::array::from_fn(|a| d[a] as f64 * h[a]);
+        grid([0.0; 3], max, d, kind).unwrap_or_else(|e| panic!("{e}"))
     }
 
-    fn hexes(&self) -> Vec<u32> {
-        let mut out = Vec::new();
-        for k in 0..self.d[2] {
-            for j in 0..self.d[1] {
-                for i in 0..self.d[0] {
-                    for c in HEX_CORNERS {
-                        out.push(self.node([
-                            i + c[0] as usize,
-                            j + c[1] as usize,
-                            k + c[2] as usize,
-                        ]));
-                    }
-                }
-            }
+    /// The grid's hexahedra, or each split into six tetrahedra, over its (moved) nodes.
+    fn scaffold(&self, shape: Element3) -> Scaffold {
+        let kind = match shape {
+            Element3::Cube => ElementKind::Hex8,
+            Element3::Tetrahedron => ElementKind::Tet4,
+        };
+        Scaffold {
+            nodes: self.nodes.clone(),
+            ..Self::scaffold_of(self.d, self.h, kind)
         }
-        out
-    }
-
-    /// Six tetrahedra per hexahedron, one per path from corner (0,0,0) to (1,1,1); corners
-    /// ordered so the map from METHOD's tetrahedron keeps orientation.
-    fn tets(&self) -> Vec<u32> {
-        let paths = [
-            [0, 1, 2],
-            [0, 2, 1],
-            [1, 0, 2],
-            [1, 2, 0],
-            [2, 0, 1],
-            [2, 1, 0],
-        ];
-        let mut out = Vec::new();
-        for k in 0..self.d[2] {
-            for j in 0..self.d[1] {
-                for i in 0..self.d[0] {
-                    for path in paths {
-                        let mut at = [i, j, k];
-                        let mut tet = vec![self.node(at)];
-                        for axis in path {
-                            at[axis] += 1;
-                            tet.push(self.node(at));
-                        }
-                        let x: Vec<[f64; 3]> =
-                            tet.iter().map(|&n| self.nodes[n as usize]).collect();
-                        if det3(sub(x[1], x[0]), sub(x[2], x[0]), sub(x[3], x[0])) < 0.0 {
-                            tet.swap(2, 3);
-                        }
-                        out.extend(tet);
-                    }
-                }
-            }
-        }
-        out
     }
 
     fn volume(&self) -> f64 {
         (0..3).map(|a| self.d[a] as f64 * self.h[a]).product()
-    }
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn det3(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
-    a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-        + a[2] * (b[0] * c[1] - b[1] * c[0])
-}
-
-/// Trilinear hex maps and affine tet maps through the grid's nodes.
-struct Maps<'a> {
-    nodes: &'a [[f64; 3]],
-    corners: &'a [u32],
-    shape: Element3,
-}
-
-impl ElementMap for Maps<'_> {
-    fn map(&self, e: usize, xi: [f64; 3]) -> [f64; 3] {
-        match self.shape {
-            Element3::Cube => {
-                let c = &self.corners[8 * e..8 * e + 8];
-                let mut x = [0.0; 3];
-                for (k, at) in HEX_CORNERS.iter().enumerate() {
-                    let w: f64 = (0..3)
-                        .map(|a| if at[a] == 1 { 0.5 + xi[a] } else { 0.5 - xi[a] })
-                        .product();
-                    for (x, node) in x.iter_mut().zip(self.nodes[c[k] as usize]) {
-                        *x += w * node;
-                    }
-                }
-                x
-            }
-            Element3::Tetrahedron => {
-                let c = &self.corners[4 * e..4 * e + 4];
-                let q = [xi[0] + 0.5, xi[1] + 0.5, xi[2] + 0.5];
-                let (u, v, w) = (
-                    (q[0] + q[1] - q[2]) / 2.0,
-                    (-q[0] + q[1] + q[2]) / 2.0,
-                    (q[0] - q[1] + q[2]) / 2.0,
-                );
-                let x: Vec<[f64; 3]> = c.iter().map(|&n| self.nodes[n as usize]).collect();
-                std::array::from_fn(|a| {
-                    x[0][a]
-                        + u * (x[1][a] - x[0][a])
-                        + v * (x[2][a] - x[0][a])
-                        + w * (x[3][a] - x[0][a])
-                })
-            }
-        }
     }
 }
 
@@ -163,24 +66,7 @@ fn tile_grid(grid: &Grid, shape: Element3, field: &dyn ScalarField, n: usize) ->
 }
 
 fn tile_solid(grid: &Grid, shape: Element3, solid: &TiledSolid, n: usize) -> (Mesh, TileStats) {
-    let corners = match shape {
-        Element3::Cube => grid.hexes(),
-        Element3::Tetrahedron => grid.tets(),
-    };
-    let maps = Maps {
-        nodes: &grid.nodes,
-        corners: &corners,
-        shape,
-    };
-    let elements = Elements {
-        shape,
-        corners: &corners,
-        map: &maps,
-    };
-    match tile(&elements, solid, n) {
-        Ok(out) => out,
-        Err(e) => panic!("tiling failed: {e}"),
-    }
+    tile_scaffold(&grid.scaffold(shape), solid, n).unwrap_or_else(|e| panic!("tiling failed: {e}"))
 }
 
 fn assert_closed(mesh: &Mesh) -> f64 {
@@ -408,18 +294,7 @@ fn a_graded_offset_matches_the_uniform_one_where_constant() {
 
 #[test]
 fn short_nodal_arrays_are_an_error() {
-    let grid = Grid::new([1, 1, 1], [1.0, 1.0, 1.0]);
-    let corners = grid.hexes();
-    let maps = Maps {
-        nodes: &grid.nodes,
-        corners: &corners,
-        shape: Element3::Cube,
-    };
-    let elements = Elements {
-        shape: Element3::Cube,
-        corners: &corners,
-        map: &maps,
-    };
+    let scaffold = Grid::new([1, 1, 1], [1.0, 1.0, 1.0]).scaffold(Element3::Cube);
     let short = vec![0.1; 3];
     let p = SchwarzP { offset: 0.0 };
     let solid = TiledSolid {
@@ -427,7 +302,7 @@ fn short_nodal_arrays_are_an_error() {
         ..TiledSolid::of(&p, Solid::Shell { thickness: 0.1 })
     };
     assert_eq!(
-        tile(&elements, &solid, 4).map(|_| ()),
+        tile_scaffold(&scaffold, &solid, 4).map(|_| ()),
         Err(TileError::NodalValues {
             what: "thickness",
             given: 3,
