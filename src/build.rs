@@ -467,6 +467,14 @@ impl<'a> Builder<'a> {
                 let mesh = stage.run(&cell, part.as_deref().map(|b| b.as_slice()), &*progress)?;
                 Ok(Value::Mesh(Arc::new(mesh)))
             }
+            Stage::Sdf(stage) => {
+                let files = (0..node.inputs.len())
+                    .map(bytes)
+                    .collect::<Result<Vec<_>, _>>()?;
+                let slices: Vec<&[u8]> = files.iter().map(|b| b.as_slice()).collect();
+                let progress = self.progress.start(&node.name, stage.steps());
+                Ok(Value::Mesh(Arc::new(stage.run(&slices, &*progress)?)))
+            }
             Stage::Write(stage) => {
                 let Value::Mesh(mesh) = input(0) else {
                     return Err("input is not a mesh".into());
@@ -523,7 +531,9 @@ fn decode(stage: &Stage, payload: Vec<u8>) -> Result<Value, String> {
         | Stage::Fit(_)
         | Stage::Combine(_)
         | Stage::Constrain(_) => Ok(Value::Bytes(Arc::new(payload))),
-        Stage::Contour(_) => Ok(Value::Mesh(Arc::new(MeshArtifact::decode(&payload)?))),
+        Stage::Contour(_) | Stage::Sdf(_) => {
+            Ok(Value::Mesh(Arc::new(MeshArtifact::decode(&payload)?)))
+        }
         Stage::Write(_) => serde_json::from_slice(&payload)
             .map(|w| Value::Written(Arc::new(w)))
             .map_err(|e| e.to_string()),

@@ -33,6 +33,9 @@ pub struct Report {
     pub volume_fraction: f64,
     /// A planar region of a 2D cell (open by nature: `watertight` is false).
     pub planar: bool,
+    /// For an SDF output, the box it was contoured over (its bounds, when not given).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sdf_box: Option<Bbox>,
     pub bbox: Bbox,
     pub files: Vec<String>,
     pub stages: Vec<StageReport>,
@@ -40,11 +43,16 @@ pub struct Report {
 
 impl Report {
     pub fn new(manifest: &Manifest, result: &OutputResult) -> Report {
-        let output = &manifest.outputs[&result.name];
         let s = &result.written.summary;
-        let domain_volume: f64 = (0..3)
-            .map(|a| output.domain_max[a] - output.domain_min[a])
-            .product();
+        // An SDF output's box is found when it is contoured; a cell output's is the manifest's.
+        let domain = match (result.written.domain, manifest.outputs.get(&result.name)) {
+            (Some([min, max]), _) => Some((min, max)),
+            (None, Some(output)) => Some((output.domain_min, output.domain_max)),
+            (None, None) => None,
+        };
+        let domain_volume: f64 = domain.map_or(f64::NAN, |(min, max)| {
+            (0..3).map(|a| max[a] - min[a]).product()
+        });
         Report {
             name: result.name.clone(),
             triangles: s.triangles,
@@ -60,6 +68,7 @@ impl Report {
                 None => s.volume / domain_volume,
             },
             planar: result.written.planar_element_area.is_some(),
+            sdf_box: result.written.domain.map(|[min, max]| Bbox { min, max }),
             bbox: Bbox {
                 min: s.bbox_min,
                 max: s.bbox_max,

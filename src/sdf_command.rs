@@ -12,8 +12,10 @@
 //! Exit codes as for `build`: 0 written, 2 bad arguments or program, 1 nothing could be
 //! written. One summary line on stderr, like the build's.
 //!
-//! Invariant: like the rest of `cli.rs`, this is where files are touched: included files are
-//! read here, and the mesh is written to a temporary file renamed into place.
+//! Invariant: like the rest of `cli.rs`, this is where files are touched: included files and
+//! `file` meshes are read here (a relative name is relative to the include file naming it),
+//! and the mesh is written to a temporary file renamed into place. Contouring is the `sdf`
+//! stage's (`stages/sdf.rs`), so a program gives the same mesh here and in a manifest.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -21,32 +23,33 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use latticebuild_geom::mesh_io::{self, Encoding, Format};
-use latticebuild_geom::mesh_read;
-use latticebuild_geom::mesh_sdf::{MeshSdf, SdfOptions};
 use latticebuild_geom::sdf::{
     self, Aabb, ExternalField, ExternalSolids, IncludeResolver, Included, Program, Word,
 };
-use latticebuild_geom::validate;
 
 use super::Failure;
+use crate::build::NoProgress;
 use crate::files::write_atomically;
+use crate::stages::sdf::{box_text, contour_field, mesh_field};
 
-/// The field of the mesh a `file` word names: its signed distance (the format by content,
-/// or by extension when the content does not tell).
-fn resolve_mesh(path: &str) -> Result<Arc<dyn ExternalField>, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read `{path}`: {e}"))?;
-    let extension = Path::new(path).extension().and_then(|e| e.to_str());
-    let soup = mesh_read::read_auto(&bytes, extension)
-        .map_err(|e| format!("cannot read `{path}`: {e}"))?;
-    let sdf = MeshSdf::new(&soup, SdfOptions::default()).map_err(|e| format!("`{path}`: {e}"))?;
-    Ok(Arc::new(sdf))
-}
-
+/// `file` words' meshes from the filesystem: a path is relative to the include file holding
+/// the word (to the working directory for words on the command line), like `@` names.
 struct MeshFiles;
 
 impl ExternalSolids for MeshFiles {
-    fn resolve(&self, path: &str) -> Result<Arc<dyn ExternalField>, String> {
-        resolve_mesh(path)
+    fn resolve(&self, path: &str, from: Option<&str>) -> Result<Arc<dyn ExternalField>, String> {
+        let full = relative_to(path, from);
+        let shown = full.display().to_string();
+        let bytes = std::fs::read(&full).map_err(|e| format!("cannot read `{shown}`: {e}"))?;
+        mesh_field(&shown, &bytes)
+    }
+}
+
+/// `name` relative to the directory of the file `from` (as is when `from` is `None`).
+fn relative_to(name: &str, from: Option<&str>) -> PathBuf {
+    match from.and_then(|f| Path::new(f).parent()) {
+        Some(dir) => dir.join(name),
+        None => PathBuf::from(name),
     }
 }
 
@@ -57,10 +60,7 @@ struct FileIncludes;
 
 impl IncludeResolver for FileIncludes {
     fn read(&self, name: &str, from: Option<&str>) -> Result<Included, String> {
-        let path = match from.and_then(|f| Path::new(f).parent()) {
-            Some(dir) => dir.join(name),
-            None => PathBuf::from(name),
-        };
+        let path = relative_to(name, from);
         let canonical = path
             .canonicalize()
             .map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
@@ -167,21 +167,15 @@ fn command(args: &[String]) -> Result<(), Failure> {
     let format = output_format(&options.output)?;
     let program = Program::parse(&options.words).map_err(usage)?;
     let field = program.field(&MeshFiles).map_err(usage)?;
-    let domain = options.domain.unwrap_or_else(|| field.domain());
-    let mesh =
-        sdf::mesh(&field, &domain, options.samples).map_err(|e| Failure::Build(e.to_string()))?;
     let shown = options.output.display();
-    if mesh.is_empty() {
-        return Err(Failure::Build(format!(
-            "the solid has no surface in the box {}: `{shown}` was not written",
-            box_text(&domain)
-        )));
-    }
+    let samples = |_: &Aabb| Ok(options.samples);
+    let contoured = contour_field(&field, options.domain, &samples, &NoProgress)
+        .map_err(|e| Failure::Build(format!("{e}: `{shown}` was not written")))?;
+    let (mesh, check, domain) = (&contoured.mesh, &contoured.check, &contoured.domain);
     write_atomically(&options.output, &mut |w| {
-        mesh_io::write_mesh(&mesh, format, Encoding::Binary, w)
+        mesh_io::write_mesh(mesh, format, Encoding::Binary, w)
     })
     .map_err(|e| Failure::Build(format!("cannot write `{shown}`: {e}")))?;
-    let check = validate::check(&mesh);
     if !options.quiet {
         let validity = match (check.watertight, check.manifold) {
             (true, true) => "watertight, manifold".to_string(),
@@ -199,7 +193,7 @@ fn command(args: &[String]) -> Result<(), Failure> {
             check.vertices,
             check.volume,
             check.volume / domain.volume(),
-            box_text(&domain),
+            box_text(domain),
             started.elapsed().as_secs_f64()
         );
     }
@@ -223,12 +217,4 @@ fn output_format(path: &Path) -> Result<Format, Failure> {
             path.display()
         ))
     })
-}
-
-/// `[x0,x1]×[y0,y1]×[z0,z1]`
-fn box_text(b: &Aabb) -> String {
-    (0..3)
-        .map(|a| format!("[{},{}]", b.min[a], b.max[a]))
-        .collect::<Vec<_>>()
-        .join("×")
 }

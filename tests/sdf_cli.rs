@@ -243,3 +243,31 @@ fn a_mesh_filled_with_a_gyroid_by_a_file_word() {
     let fraction = volume / sphere;
     assert!((fraction - 0.5).abs() < 0.02, "fraction {fraction}");
 }
+
+#[test]
+fn file_words_in_includes_are_relative_to_their_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let sub = dir.path().join("parts");
+    std::fs::create_dir(&sub).unwrap();
+    let (stl, sphere) = common::sphere_stl(1.0, [0.0; 3], 24, 48);
+    std::fs::write(sub.join("ball.stl"), stl).unwrap();
+    // `ball.stl` is beside the include, not in the working directory.
+    std::fs::write(sub.join("part.txt"), "file ball.stl").unwrap();
+    let out = sdf(dir.path(), &["@parts/part.txt", "-s", "40^3", "-q"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(dir.path().join("out.ply").exists());
+    let out = sdf(dir.path(), &["@parts/part.txt", "-s", "40^3"]);
+    let (_, _, volume) = summary(&out);
+    assert!(
+        (volume - sphere).abs() < 0.03 * sphere,
+        "{volume} vs {sphere}"
+    );
+    // On the command line a path is still relative to the working directory.
+    let out = sdf(dir.path(), &["file", "ball.stl"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("cannot read `ball.stl`"),
+        "{}",
+        stderr(&out)
+    );
+}

@@ -13,7 +13,9 @@ use std::collections::BTreeMap;
 use crate::manifest::{CellSource, FitResolution, Manifest, MeshFile};
 use crate::stages::Stage;
 use crate::stages::mesh::{FileStage, MeshCellStage};
+use crate::stages::sdf::SdfStage;
 use crate::stages::symmetric::{Combination, CombineStage, ConstrainStage, FitStage, SampleStage};
+use crate::stages::write::WriteStage;
 
 /// Index of a node in [`Graph::nodes`].
 pub type NodeId = usize;
@@ -186,6 +188,20 @@ impl Graph {
                 inputs,
             );
             let write = graph.push(format!("write:{name}"), Stage::write(output), vec![contour]);
+            graph.outputs.insert(name.clone(), write);
+        }
+        // An SDF output: `sdf` reading a `file:` node per mesh of its program, then `write`.
+        for (name, output) in &manifest.sdf_outputs {
+            let files = output.files.iter().map(|f| compiler.file(&mut graph, f));
+            let files = files.collect();
+            let stage = Stage::Sdf(SdfStage::new(output));
+            let solid = graph.push(format!("sdf:{name}"), stage, files);
+            let write = WriteStage {
+                formats: output.formats.clone(),
+                encoding: output.encoding,
+                stem: output.stem.clone(),
+            };
+            let write = graph.push(format!("write:{name}"), Stage::Write(write), vec![solid]);
             graph.outputs.insert(name.clone(), write);
         }
         graph.check_order()?;

@@ -52,7 +52,11 @@ pub(crate) fn error_at(
 }
 
 /// Where the characters of `value` start in the source, if the source spells them unchanged.
-fn content_start(sources: &Sources<'_>, span: &Range<usize>, value: &str) -> Option<usize> {
+pub(crate) fn content_start(
+    sources: &Sources<'_>,
+    span: &Range<usize>,
+    value: &str,
+) -> Option<usize> {
     let raw = sources.slice(span)?;
     if raw == value {
         return Some(span.start);

@@ -73,6 +73,11 @@ fn check_input_files(
             o.within
                 .as_ref()
                 .map(|f| (format!("outputs.{name}.within"), f))
+        }))
+        .chain(manifest.sdf_outputs.iter().flat_map(|(name, o)| {
+            o.files
+                .iter()
+                .map(move |f| (format!("outputs.{name}.sdf"), f))
         }));
     for (key, file) in named {
         let problem = match std::fs::metadata(&file.path) {

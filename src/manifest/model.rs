@@ -7,6 +7,7 @@ use std::path::PathBuf;
 
 use latticebuild_geom::field::Solid;
 use latticebuild_geom::mesh_io::{Encoding, Format};
+use latticebuild_geom::sdf::Program;
 
 /// A validated manifest.
 #[derive(Clone, Debug, PartialEq)]
@@ -19,6 +20,9 @@ pub struct Manifest {
     pub out_dir: PathBuf,
     pub cells: BTreeMap<String, Cell>,
     pub outputs: BTreeMap<String, Output>,
+    /// Outputs whose solid is an SDF program (`sdf = "…"`); their names differ from those of
+    /// `outputs` (one `[outputs]` table holds both).
+    pub sdf_outputs: BTreeMap<String, SdfOutput>,
     /// Every external file the manifest references (not the manifest itself), for `watch`.
     pub inputs: Vec<PathBuf>,
 }
@@ -160,4 +164,61 @@ pub struct Output {
     /// `skin = t`: a closed skin of thickness `t` (model units) along the part's surface;
     /// only with `within`.
     pub skin: Option<f64>,
+}
+
+/// An output whose solid is an SDF program in the Cesogen stack language (`sdf = "…"`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SdfOutput {
+    pub name: Name,
+    /// The program, parsed and checked (`latticebuild_geom::sdf`).
+    pub program: Program,
+    /// The mesh files its `file` words name, once each in order of first use; each span is
+    /// the path's word in the program string.
+    pub files: Vec<MeshFile>,
+    /// `bounds = { min, max }`; `None`: the program's own bounds, found when it is contoured.
+    pub bounds: Option<[[f64; 3]; 2]>,
+    pub resolution: SdfResolution,
+    /// Formats to write, sorted and without duplicates.
+    pub formats: Vec<Format>,
+    pub encoding: Encoding,
+    /// Output path stem relative to `out_dir` (default: the output's name).
+    pub stem: String,
+}
+
+/// How finely an SDF output is sampled.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SdfResolution {
+    /// Samples per axis, each at least 2.
+    Counts([usize; 3]),
+    /// Grid spacing in model units; the counts follow from the box ([`voxel_samples`]), which
+    /// without `bounds` is known only when the program is contoured.
+    Voxel(f64),
+}
+
+/// Most samples along one axis (a guard against typos such as `voxel = 1e-9`).
+pub const MAX_SAMPLES_PER_AXIS: usize = 100_000;
+
+/// Voxel ratios this close (relatively) to a whole number count as that number, so that
+/// `1.1 / 0.1 = 11.000000000000002` gives 11 intervals, not 12.
+const VOXEL_ROUNDING: f64 = 1e-9;
+
+/// Samples per axis for grid spacing `voxel` over the box: `ceil(extent / voxel) + 1` (at
+/// least 2), or the first axis that would need more than [`MAX_SAMPLES_PER_AXIS`].
+pub fn voxel_samples(min: [f64; 3], max: [f64; 3], voxel: f64) -> Result<[usize; 3], usize> {
+    let mut counts = [0; 3];
+    for axis in 0..3 {
+        let ratio = (max[axis] - min[axis]) / voxel;
+        let intervals = if (ratio - ratio.round()).abs() <= VOXEL_ROUNDING * ratio {
+            ratio.round()
+        } else {
+            ratio.ceil()
+        };
+        // Compared as floats first: a tiny voxel can give a ratio beyond `usize`.
+        if intervals + 1.0 > MAX_SAMPLES_PER_AXIS as f64 {
+            return Err(axis);
+        }
+        // An axis without extent (z of a 2D element) still gets 2 samples.
+        counts[axis] = (intervals as usize).max(1) + 1;
+    }
+    Ok(counts)
 }

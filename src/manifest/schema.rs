@@ -22,12 +22,14 @@ use toml::Spanned;
 use toml::de::{DeString, DeTable, DeValue};
 
 use super::expression;
-use super::model::{Cell, Manifest, Name, Output};
+use super::model::{Cell, MAX_SAMPLES_PER_AXIS, Manifest, Name, Output, voxel_samples};
 use super::source::Report;
 use crate::diagnostics::Diagnostic;
 
 #[path = "meshes.rs"]
 mod meshes;
+#[path = "sdf.rs"]
+mod sdf;
 #[path = "symmetry.rs"]
 mod symmetry;
 
@@ -52,8 +54,10 @@ const CELL_KEYS: [&str; 14] = [
     "offset",
     "invert",
 ];
-const OUTPUT_KEYS: [&str; 14] = [
+const OUTPUT_KEYS: [&str; 16] = [
     "cell",
+    "sdf",
+    "bounds",
     "over",
     "domain",
     "cell_size",
@@ -74,11 +78,7 @@ const AXES: [&str; 3] = ["x", "y", "z"];
 
 /// The largest number of samples allowed along one axis (a guard against typos such as
 /// `voxel = 1e-9`, which would otherwise ask for an absurd grid).
-pub(crate) const MAX_SAMPLES: i64 = 100_000;
-
-/// Voxel ratios this close (relatively) to a whole number count as that number, so that
-/// `1.1 / 0.1 = 11.000000000000002` gives 11 intervals, not 12.
-const VOXEL_ROUNDING: f64 = 1e-9;
+pub(crate) const MAX_SAMPLES: i64 = MAX_SAMPLES_PER_AXIS as i64;
 
 /// Whether the schema expects a string at this dotted path (for typing `--set` values).
 pub(crate) fn expects_string(path: &[&str]) -> bool {
@@ -90,7 +90,11 @@ pub(crate) fn expects_string(path: &[&str]) -> bool {
                 _,
                 "tpms" | "expr" | "extend" | "mesh" | "placement" | "sample"
             ]
-            | ["outputs", _, "cell" | "over" | "solid" | "path" | "within"]
+            | [
+                "outputs",
+                _,
+                "cell" | "sdf" | "over" | "solid" | "path" | "within"
+            ]
     )
 }
 
@@ -158,8 +162,13 @@ pub(crate) fn validate(
     }
     let cells = checker.resolve(drafts);
     let mut outputs = BTreeMap::new();
+    let mut sdf_outputs = BTreeMap::new();
     for (key, value) in outputs_table.into_iter().flatten() {
-        if let Some(output) = checker.output(key, value, &cell_names, &cells) {
+        if sdf::is_sdf_output(value) {
+            if let Some(output) = checker.sdf_output(key, value) {
+                sdf_outputs.insert(output.name.text.clone(), output);
+            }
+        } else if let Some(output) = checker.output(key, value, &cell_names, &cells) {
             outputs.insert(output.name.text.clone(), output);
         }
     }
@@ -176,9 +185,10 @@ pub(crate) fn validate(
         path: manifest_path.to_path_buf(),
         out_dir,
         root: dir,
-        inputs: meshes::input_files(&cells, &outputs),
+        inputs: sdf::with_program_files(meshes::input_files(&cells, &outputs), &sdf_outputs),
         cells,
         outputs,
+        sdf_outputs,
     })
 }
 
@@ -248,10 +258,12 @@ impl Checker<'_, '_, '_> {
         let fields = self.fields(table, &OUTPUT_KEYS, &within);
         let header = value.span();
         let path = |k: &str| format!("outputs.{name}.{k}");
+        self.sdf_only_keys(name, &fields);
 
         let cell = match fields.get("cell") {
             None => {
-                let help = "add `cell = \"NAME\"` naming one of the `[cells.NAME]` tables";
+                let help = "add `cell = \"NAME\"` naming one of the `[cells.NAME]` tables, \
+                            or `sdf = \"…\"` with an SDF program";
                 self.missing(&fields, &header, "cell", &within, "missing `cell`", help);
                 None
             }
@@ -626,30 +638,24 @@ impl Checker<'_, '_, '_> {
                 let key = path("voxel");
                 let voxel = self.positive_number(&key, v, "a number")?;
                 let (min, max) = domain.map(|d| (d.min, d.max))?;
-                let mut counts = [0; 3];
-                for axis in 0..3 {
-                    let ratio = (max[axis] - min[axis]) / voxel;
-                    let intervals = if (ratio - ratio.round()).abs() <= VOXEL_ROUNDING * ratio {
-                        ratio.round()
-                    } else {
-                        ratio.ceil()
-                    };
-                    // Compared as floats first: a tiny voxel can give a ratio beyond `usize`.
-                    if intervals + 1.0 > MAX_SAMPLES as f64 {
-                        self.error(
-                            v.span(),
-                            &format!("`{key}` is too small for the domain"),
-                            &format!("gives more than {MAX_SAMPLES} samples along {}", AXES[axis]),
-                            Some("samples per axis are ceil(extent / voxel) + 1"),
-                        );
-                        return None;
+                match voxel_samples(min, max, voxel) {
+                    Ok(counts) => Some(counts),
+                    Err(axis) => {
+                        self.voxel_too_small(&key, v, axis);
+                        None
                     }
-                    // An axis without extent (z of a 2D element) still gets 2 samples.
-                    counts[axis] = (intervals as usize).max(1) + 1;
                 }
-                Some(counts)
             }
         }
+    }
+
+    fn voxel_too_small(&mut self, key: &str, value: &Value<'_>, axis: usize) {
+        self.error(
+            value.span(),
+            &format!("`{key}` is too small for the domain"),
+            &format!("gives more than {MAX_SAMPLES} samples along {}", AXES[axis]),
+            Some("samples per axis are ceil(extent / voxel) + 1"),
+        );
     }
 
     fn formats(

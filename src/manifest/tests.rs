@@ -251,7 +251,7 @@ error: missing key `cell` in output `g`
 1 | [outputs.g]
   | ^^^^^^^^^^^ missing `cell`
   |
-  = help: add `cell = \"NAME\"` naming one of the `[cells.NAME]` tables
+  = help: add `cell = \"NAME\"` naming one of the `[cells.NAME]` tables, or `sdf = \"…\"` with an SDF program
 
 error: missing key `domain` in output `g`
  --> lattice.toml:1:1
@@ -944,6 +944,7 @@ fn defaults_are_filled_in() {
             },
         )]),
         outputs: BTreeMap::from([("g".to_string(), output("g", Some(41..42)))]),
+        sdf_outputs: BTreeMap::new(),
         inputs: Vec::new(),
     };
     assert_eq!(manifest, expected);
@@ -1277,3 +1278,6 @@ fn reference_example_is_valid() {
 mod mesh_tests;
 #[path = "symmetry_tests.rs"]
 mod symmetry_tests;
+
+#[path = "sdf_tests.rs"]
+mod sdf_tests;

@@ -63,6 +63,9 @@ pub struct MeshArtifact {
     pub mesh: Mesh,
     pub summary: MeshSummary,
     pub planar: Option<Planar>,
+    /// The box `[min, max]` an SDF program was contoured over, found when it ran (its bounds
+    /// are computed then); `None` for cells, whose domain is the manifest's.
+    pub domain: Option<[[f64; 3]; 2]>,
 }
 
 /// What the SVG of a 2D cell needs: the region's boundary loops and the element's outline.
@@ -78,6 +81,9 @@ pub struct Planar {
 struct MeshHead {
     summary: MeshSummary,
     planar: Option<Planar>,
+    // Absent for cells, so their payloads (and hashes) are what they were before SDF outputs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    domain: Option<[[f64; 3]; 2]>,
 }
 
 impl MeshArtifact {
@@ -87,6 +93,7 @@ impl MeshArtifact {
         let head = MeshHead {
             summary: self.summary.clone(),
             planar: self.planar.clone(),
+            domain: self.domain,
         };
         let summary = serde_json::to_vec(&head).expect("summary serializes");
         let mut head = Vec::with_capacity(32 + summary.len());
@@ -132,8 +139,11 @@ impl MeshArtifact {
         if payload.len() != end {
             return Err(bad("length does not match the counts"));
         }
-        let MeshHead { summary, planar } =
-            serde_json::from_slice(&payload[32..summary_end]).map_err(|e| bad(&e.to_string()))?;
+        let MeshHead {
+            summary,
+            planar,
+            domain,
+        } = serde_json::from_slice(&payload[32..summary_end]).map_err(|e| bad(&e.to_string()))?;
         let vertices = bytemuck::pod_collect_to_vec(&payload[summary_end..vertices_end]);
         let triangles = bytemuck::pod_collect_to_vec(&payload[vertices_end..end]);
         Ok(MeshArtifact {
@@ -143,6 +153,7 @@ impl MeshArtifact {
             },
             summary,
             planar,
+            domain,
         })
     }
 }
@@ -166,4 +177,7 @@ pub struct WrittenOutput {
     pub summary: MeshSummary,
     /// For a 2D cell, the element's area (the report's fraction is area over it).
     pub planar_element_area: Option<f64>,
+    /// For an SDF program, the box it was contoured over (see [`MeshArtifact::domain`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub domain: Option<[[f64; 3]; 2]>,
 }

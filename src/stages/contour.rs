@@ -152,6 +152,7 @@ impl ContourStage {
             mesh,
             summary,
             planar,
+            domain: None,
         })
     }
 

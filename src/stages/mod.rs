@@ -18,12 +18,14 @@
 //! | `blend`   | group, weights                                          | member coefficient tables | coefficient table |
 //! | `minkowski` | group, op, N                                          | two coefficient tables | coefficient table |
 //! | `constrain` | group, normal_to_faces, offset, invert                | coefficient table | coefficient table + constraint report |
+//! | `sdf`     | canonical program (paths as input numbers), bounds, samples or voxel | the `file` words' bytes | mesh + its check + the box |
 //! | `write`   | formats, encoding, path stem                            | contour payload| files written and the mesh summary (JSON) |
 
 pub mod artifact;
 pub mod cell;
 pub mod contour;
 pub mod mesh;
+pub mod sdf;
 pub mod symmetric;
 pub mod write;
 
@@ -44,6 +46,7 @@ pub enum Stage {
     Combine(symmetric::CombineStage),
     Constrain(symmetric::ConstrainStage),
     Contour(contour::ContourStage),
+    Sdf(sdf::SdfStage),
     Write(write::WriteStage),
 }
 
@@ -71,6 +74,7 @@ impl Stage {
             Stage::Combine(s) => s.kind(),
             Stage::Constrain(_) => "constrain",
             Stage::Contour(_) => "contour",
+            Stage::Sdf(_) => "sdf",
             Stage::Write(_) => "write",
         }
     }
@@ -84,6 +88,7 @@ impl Stage {
                 symmetric::VERSION
             }
             Stage::Contour(_) => contour::VERSION,
+            Stage::Sdf(_) => sdf::VERSION,
             Stage::Write(_) => write::VERSION,
         }
     }
@@ -100,6 +105,7 @@ impl Stage {
             Stage::Combine(s) => s.key_params(builder),
             Stage::Constrain(s) => s.key_params(builder),
             Stage::Contour(s) => s.key_params(builder),
+            Stage::Sdf(s) => s.key_params(builder),
             Stage::Write(s) => s.key_params(builder),
         };
         let builder = inputs
@@ -121,6 +127,7 @@ impl Stage {
             Stage::Constrain(_) => "fit".into(),
             Stage::Contour(_) if i == 0 => "cell".into(),
             Stage::Contour(_) => "part".into(),
+            Stage::Sdf(s) => format!("file {}", s.files.get(i).map_or("?", |f| f.as_str())),
             Stage::Write(_) => "mesh".into(),
         }
     }

@@ -109,6 +109,7 @@ impl WriteStage {
             files,
             summary: artifact.summary.clone(),
             planar_element_area: artifact.planar.as_ref().map(|p| p.element_area),
+            domain: artifact.domain,
         })
     }
 }

@@ -37,7 +37,7 @@ impl ExternalField for Ball {
 struct Meshes;
 
 impl ExternalSolids for Meshes {
-    fn resolve(&self, path: &str) -> Result<Arc<dyn ExternalField>, String> {
+    fn resolve(&self, path: &str, _from: Option<&str>) -> Result<Arc<dyn ExternalField>, String> {
         Ok(Arc::new(Ball {
             r: 2.0,
             distance: path == "distance.stl",

@@ -30,14 +30,17 @@ pub trait ExternalField: ScalarField {
 /// Resolves the paths of `file` words to fields.
 pub trait ExternalSolids {
     /// The field of the mesh at `path` (as written in the program), or why there is none.
-    fn resolve(&self, path: &str) -> Result<Arc<dyn ExternalField>, String>;
+    /// `from` is the include file holding the `file` word (its id, as the
+    /// [`IncludeResolver`](super::IncludeResolver) gave it), `None` for top-level words: a
+    /// relative path is meant relative to that file.
+    fn resolve(&self, path: &str, from: Option<&str>) -> Result<Arc<dyn ExternalField>, String>;
 }
 
 /// A resolver for programs that may not use `file` words.
 pub struct NoExternalSolids;
 
 impl ExternalSolids for NoExternalSolids {
-    fn resolve(&self, _path: &str) -> Result<Arc<dyn ExternalField>, String> {
+    fn resolve(&self, _path: &str, _from: Option<&str>) -> Result<Arc<dyn ExternalField>, String> {
         Err("meshes are not available here".to_string())
     }
 }

@@ -17,6 +17,7 @@ use super::external::{ExternalField, ExternalSolids};
 use super::machine::{self, BLOCK, Stack};
 use super::sampler::SdfSampler;
 use super::tree::{Op, Tree};
+use super::words::Origin;
 use crate::field::{Grid, PlaneSampler, ScalarField};
 
 /// A compiled SDF program.
@@ -33,10 +34,16 @@ impl SdfField {
         let mut resolved: Vec<Option<Arc<dyn ExternalField>>> = vec![None; nodes.len()];
         for (n, node) in nodes.iter().enumerate() {
             if let Op::File(path) = &node.op {
-                let field = externals.resolve(path).map_err(|message| SdfError::File {
-                    at: node.at.clone(),
-                    message,
-                })?;
+                let from = match &node.at.origin {
+                    Origin::File { file, .. } => Some(&**file),
+                    Origin::Arg(_) => None,
+                };
+                let field = externals
+                    .resolve(path, from)
+                    .map_err(|message| SdfError::File {
+                        at: node.at.clone(),
+                        message,
+                    })?;
                 resolved[n] = Some(field);
             }
         }

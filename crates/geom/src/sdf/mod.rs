@@ -76,7 +76,7 @@ pub use options::{OptionError, parse_box, parse_samples, spread_samples};
 pub use parse::{BINARY_WORDS, SOLID_WORDS, UNARY_WORDS};
 pub use sampler::{TILE_X, TILE_Y};
 pub use tree::{Node, Op, Tree};
-pub use words::{At, Origin, Word, quote, split_words};
+pub use words::{At, Origin, Word, quote, split_words, split_words_spanned};
 
 use crate::contour::{ContourError, contour};
 use crate::field::{Grid, ScalarField};
@@ -141,10 +141,21 @@ impl Program {
 /// Contours `field` on the grid of `counts` samples spanning `domain`, with the solid capped
 /// on the domain's faces.
 pub fn mesh(field: &SdfField, domain: &Aabb, counts: [usize; 3]) -> Result<Mesh, ContourError> {
+    mesh_with_progress(field, domain, counts, &|_| {})
+}
+
+/// [`mesh`], calling `progress(n)` as each `n` more layers of cubes (of `counts[2] − 1`) are
+/// done.
+pub fn mesh_with_progress(
+    field: &SdfField,
+    domain: &Aabb,
+    counts: [usize; 3],
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<Mesh, ContourError> {
     if counts.iter().any(|&n| n < 2) {
         return Err(ContourError::TooFewSamples(counts));
     }
     let grid = Grid::spanning(domain.min, domain.max, counts);
     let sampler = field.sampler(&grid);
-    contour(sampler.as_ref(), &grid, &|_| {})
+    contour(sampler.as_ref(), &grid, progress)
 }

@@ -12,6 +12,7 @@
 //!   opening quote.
 
 use std::fmt;
+use std::ops::Range;
 use std::sync::Arc;
 
 /// Where a word came from.
@@ -83,14 +84,23 @@ impl fmt::Display for At {
 /// Splits program text into words at whitespace; quoted runs (`"…"` or `'…'`) belong to one
 /// word and lose their quotes. On an unclosed quote, returns the byte offset of the quote.
 pub fn split_words(text: &str) -> Result<Vec<String>, usize> {
+    Ok(split_words_spanned(text)?
+        .into_iter()
+        .map(|(word, _)| word)
+        .collect())
+}
+
+/// [`split_words`], with the byte range each word spans in `text` (quotes included), so that
+/// a caller can point at a word of a program string.
+pub fn split_words_spanned(text: &str) -> Result<Vec<(String, Range<usize>)>, usize> {
     let mut words = Vec::new();
     let mut current = String::new();
-    let mut in_word = false;
+    let mut start = None;
     let mut chars = text.char_indices();
     while let Some((at, c)) = chars.next() {
         match c {
             '"' | '\'' => {
-                in_word = true;
+                start.get_or_insert(at);
                 let mut closed = false;
                 for (_, d) in chars.by_ref() {
                     if d == c {
@@ -104,19 +114,18 @@ pub fn split_words(text: &str) -> Result<Vec<String>, usize> {
                 }
             }
             c if c.is_whitespace() => {
-                if in_word {
-                    words.push(std::mem::take(&mut current));
-                    in_word = false;
+                if let Some(from) = start.take() {
+                    words.push((std::mem::take(&mut current), from..at));
                 }
             }
             c => {
-                in_word = true;
+                start.get_or_insert(at);
                 current.push(c);
             }
         }
     }
-    if in_word {
-        words.push(current);
+    if let Some(from) = start {
+        words.push((current, from..text.len()));
     }
     Ok(words)
 }
@@ -155,6 +164,19 @@ mod tests {
         assert_eq!(split_words("\"\"").unwrap(), [""]);
         assert_eq!(split_words("ball \"oops").unwrap_err(), 5);
         assert!(split_words("   ").unwrap().is_empty());
+    }
+
+    #[test]
+    fn spans_cover_each_word_with_its_quotes() {
+        let text = "ball  'x + y'\tscale 1/2";
+        let words = split_words_spanned(text).unwrap();
+        let spans: Vec<&str> = words.iter().map(|(_, r)| &text[r.clone()]).collect();
+        assert_eq!(spans, ["ball", "'x + y'", "scale", "1/2"]);
+        assert_eq!(words[1].0, "x + y");
+        assert_eq!(
+            split_words_spanned("a\"b c\"d").unwrap(),
+            [("ab cd".to_string(), 0..7)]
+        );
     }
 
     #[test]

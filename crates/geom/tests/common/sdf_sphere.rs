@@ -35,7 +35,7 @@ pub struct SphereFile {
 }
 
 impl ExternalSolids for SphereFile {
-    fn resolve(&self, path: &str) -> Result<Arc<dyn ExternalField>, String> {
+    fn resolve(&self, path: &str, _from: Option<&str>) -> Result<Arc<dyn ExternalField>, String> {
         match self.name {
             Some(name) if name != path => Err(format!("cannot read `{path}`")),
             _ => Ok(Arc::new(Sphere {
