@@ -26,6 +26,8 @@ use super::model::{Cell, Manifest, Name, Output};
 use super::source::Report;
 use crate::diagnostics::Diagnostic;
 
+#[path = "crystals.rs"]
+mod crystals;
 #[path = "meshes.rs"]
 mod meshes;
 #[path = "symmetry.rs"]
@@ -36,7 +38,7 @@ type Value<'i> = Spanned<DeValue<'i>>;
 
 const TOP_KEYS: [&str; 3] = ["build", "cells", "outputs"];
 const BUILD_KEYS: [&str; 1] = ["out_dir"];
-const CELL_KEYS: [&str; 14] = [
+const CELL_KEYS: [&str; 18] = [
     "tpms",
     "expr",
     "blend",
@@ -44,6 +46,10 @@ const CELL_KEYS: [&str; 14] = [
     "mesh",
     "placement",
     "sample",
+    "crystal",
+    "species",
+    "reconstruct",
+    "ps",
     "symmetry",
     "fit",
     "extend",
@@ -88,7 +94,14 @@ pub(crate) fn expects_string(path: &[&str]) -> bool {
             | [
                 "cells",
                 _,
-                "tpms" | "expr" | "extend" | "mesh" | "placement" | "sample"
+                "tpms"
+                    | "expr"
+                    | "extend"
+                    | "mesh"
+                    | "placement"
+                    | "sample"
+                    | "crystal"
+                    | "species"
             ]
             | ["outputs", _, "cell" | "over" | "solid" | "path" | "within"]
     )
