@@ -444,6 +444,7 @@ impl<'a> Builder<'a> {
             Stage::File(file) => Err(format!("`{}` is read, not run", file.given)),
             Stage::Cell(stage) => Ok(Value::Bytes(Arc::new(stage.run()?))),
             Stage::MeshCell(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
+            Stage::Crystal(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
             Stage::Sample(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
             Stage::Fit(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
             Stage::Constrain(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
@@ -527,6 +528,7 @@ fn decode(stage: &Stage, payload: Vec<u8>) -> Result<Value, String> {
         Stage::File(_)
         | Stage::Cell(_)
         | Stage::MeshCell(_)
+        | Stage::Crystal(_)
         | Stage::Sample(_)
         | Stage::Fit(_)
         | Stage::Combine(_)

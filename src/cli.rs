@@ -16,6 +16,8 @@ use crate::manifest::{self, Manifest};
 use crate::progress::Bars;
 use crate::report::Report;
 
+#[path = "crystal_command.rs"]
+mod crystal_command;
 #[path = "sdf_command.rs"]
 mod sdf_command;
 
@@ -60,6 +62,8 @@ enum Command {
                             -q (no summary)."
     )]
     Sdf(SdfArgs),
+    /// Reconstruct the periodic surface through a crystal's atoms (CIF or extended XYZ)
+    Crystal(crystal_command::CrystalArgs),
 }
 
 #[derive(Args, Debug, Clone)]
@@ -171,6 +175,7 @@ pub fn main() -> ExitCode {
             Err(f) => f.exit(),
         },
         Command::Sdf(args) => sdf_command::run(&args.words),
+        Command::Crystal(args) => crystal_command::run(&args),
     }
 }
 

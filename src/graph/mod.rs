@@ -12,6 +12,7 @@ use std::collections::BTreeMap;
 
 use crate::manifest::{CellSource, FitResolution, Manifest, MeshFile};
 use crate::stages::Stage;
+use crate::stages::crystal::CrystalStage;
 use crate::stages::mesh::{FileStage, MeshCellStage};
 use crate::stages::sdf::SdfStage;
 use crate::stages::symmetric::{Combination, CombineStage, ConstrainStage, FitStage, SampleStage};
@@ -95,6 +96,13 @@ impl CellCompiler<'_> {
                 let stage = Stage::MeshCell(MeshCellStage { cell: mesh.clone() });
                 graph.push(format!("cell:{name}"), stage, vec![file])
             }
+            CellSource::Crystal(crystal) => {
+                let file = self.file(graph, &crystal.file);
+                let stage = Stage::Crystal(CrystalStage {
+                    cell: crystal.clone(),
+                });
+                graph.push(format!("cell:{name}"), stage, vec![file])
+            }
             _ => graph.push(format!("cell:{name}"), Stage::cell(cell), vec![]),
         }
     }
@@ -105,7 +113,11 @@ impl CellCompiler<'_> {
             return Ok(self.source(graph, name));
         };
         let fitted = match &cell.source {
-            CellSource::Tpms(_) | CellSource::Expr(_) | CellSource::Mesh(_) => {
+            CellSource::Tpms(_)
+            | CellSource::Expr(_)
+            | CellSource::Mesh(_)
+            | CellSource::Crystal(_)
+            | CellSource::Ps(_) => {
                 let formula = self.source(graph, name);
                 let fit = Stage::Fit(FitStage { spec: spec.clone() });
                 match spec.n {

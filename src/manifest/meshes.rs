@@ -184,7 +184,7 @@ impl Checker<'_, '_, '_> {
     }
 }
 
-/// Every mesh file the manifest reads, once each, in name order (for `watch` and the load-time
+/// Every mesh or crystal file the manifest reads, once each, in name order (for `watch` and the load-time
 /// existence check).
 pub(super) fn input_files(
     cells: &BTreeMap<String, Cell>,
@@ -194,6 +194,7 @@ pub(super) fn input_files(
         .values()
         .filter_map(|c| match &c.source {
             CellSource::Mesh(m) => Some(m.file.path.clone()),
+            CellSource::Crystal(c) => Some(c.file.path.clone()),
             _ => None,
         })
         .chain(

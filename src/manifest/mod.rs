@@ -52,7 +52,7 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Manifest, Vec<Diagnosti
     }
 }
 
-/// Every mesh file the manifest names must be a readable file: one error per missing file,
+/// Every mesh or crystal file the manifest names must be a readable file: one error per missing file,
 /// pointing at where it is named. (Its contents are read, and checked, by the build.)
 fn check_input_files(
     manifest: &Manifest,
@@ -66,31 +66,35 @@ fn check_input_files(
         .cells
         .iter()
         .filter_map(|(name, c)| match &c.source {
-            CellSource::Mesh(m) => Some((format!("cells.{name}.mesh"), &m.file)),
+            CellSource::Mesh(m) => Some((format!("cells.{name}.mesh"), &m.file, "mesh")),
+            CellSource::Crystal(c) => Some((format!("cells.{name}.crystal"), &c.file, "crystal")),
             _ => None,
         })
         .chain(manifest.outputs.iter().filter_map(|(name, o)| {
             o.within
                 .as_ref()
-                .map(|f| (format!("outputs.{name}.within"), f))
+                .map(|f| (format!("outputs.{name}.within"), f, "mesh"))
         }))
         .chain(manifest.sdf_outputs.iter().flat_map(|(name, o)| {
             o.files
                 .iter()
-                .map(move |f| (format!("outputs.{name}.sdf"), f))
+                .map(move |f| (format!("outputs.{name}.sdf"), f, "mesh"))
         }));
-    for (key, file) in named {
+    for (key, file, kind) in named {
         let problem = match std::fs::metadata(&file.path) {
             Ok(meta) if meta.is_file() => continue,
             Ok(_) => "it is not a file".to_string(),
             Err(err) => err.to_string(),
         };
-        let diag = Diagnostic::error(format!("cannot read the mesh `{}` of `{key}`", file.given))
-            .with_label(problem)
-            .with_help(format!(
-                "file names are relative to the manifest's directory; this one is `{}`",
-                file.path.display()
-            ));
+        let diag = Diagnostic::error(format!(
+            "cannot read the {kind} `{}` of `{key}`",
+            file.given
+        ))
+        .with_label(problem)
+        .with_help(format!(
+            "file names are relative to the manifest's directory; this one is `{}`",
+            file.path.display()
+        ));
         report.at(&file.span, diag);
     }
     if report.is_empty() {

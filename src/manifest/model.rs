@@ -60,6 +60,27 @@ pub enum CellSource {
     Minkowski { op: MinkowskiOp, cells: [String; 2] },
     /// The solid of a triangle mesh file, in the cell's reference frame.
     Mesh(MeshCell),
+    /// A loci surface reconstructed from a crystal structure (`crystal = "file.cif"`).
+    Crystal(CrystalCell),
+    /// A periodic-surface model given term by term (`ps = { terms = [...] }`).
+    Ps(Vec<latticebuild_geom::periodic::PsTerm>),
+}
+
+/// A cell whose surface passes through the atoms of a crystal file (fractional coordinates:
+/// the conventional cell is the period-1 cell). Validation guarantees `tolerance > 0` and
+/// `1 ≤ max_scale ≤ 64`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CrystalCell {
+    /// The CIF or extended XYZ file (a [`MeshFile`] in all but name: given, resolved, span).
+    pub file: MeshFile,
+    /// Only the atoms of this element (case-insensitive); all atoms when `None`.
+    pub species: Option<String>,
+    pub tolerance: f64,
+    pub max_scale: u32,
+    /// Also pass through the periodic images of atoms on the cell's faces.
+    pub include_images: bool,
+    /// Drop terms greedily to raise the porosity (Wang §5.3).
+    pub optimize: bool,
 }
 
 /// A triangle mesh file named in the manifest (`mesh = …`, `within = …`).

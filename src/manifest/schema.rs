@@ -26,6 +26,8 @@ use super::model::{Cell, MAX_SAMPLES_PER_AXIS, Manifest, Name, Output, voxel_sam
 use super::source::Report;
 use crate::diagnostics::Diagnostic;
 
+#[path = "crystals.rs"]
+mod crystals;
 #[path = "meshes.rs"]
 mod meshes;
 #[path = "sdf.rs"]
@@ -38,7 +40,7 @@ type Value<'i> = Spanned<DeValue<'i>>;
 
 const TOP_KEYS: [&str; 3] = ["build", "cells", "outputs"];
 const BUILD_KEYS: [&str; 1] = ["out_dir"];
-const CELL_KEYS: [&str; 14] = [
+const CELL_KEYS: [&str; 18] = [
     "tpms",
     "expr",
     "blend",
@@ -46,6 +48,10 @@ const CELL_KEYS: [&str; 14] = [
     "mesh",
     "placement",
     "sample",
+    "crystal",
+    "species",
+    "reconstruct",
+    "ps",
     "symmetry",
     "fit",
     "extend",
@@ -88,7 +94,14 @@ pub(crate) fn expects_string(path: &[&str]) -> bool {
             | [
                 "cells",
                 _,
-                "tpms" | "expr" | "extend" | "mesh" | "placement" | "sample"
+                "tpms"
+                    | "expr"
+                    | "extend"
+                    | "mesh"
+                    | "placement"
+                    | "sample"
+                    | "crystal"
+                    | "species"
             ]
             | [
                 "outputs",

@@ -33,7 +33,15 @@ use super::{Checker, Fields, Key, Value, list};
 /// The named groups, in their canonical spelling.
 pub(super) const GROUP_NAMES: [&str; 4] = ["D3", "D4", "Td", "Oh"];
 /// The keys that give a cell its shape; a cell has exactly one.
-pub(super) const SOURCE_KEYS: [&str; 5] = ["tpms", "expr", "blend", "minkowski", "mesh"];
+pub(super) const SOURCE_KEYS: [&str; 7] = [
+    "tpms",
+    "expr",
+    "blend",
+    "minkowski",
+    "mesh",
+    "crystal",
+    "ps",
+];
 /// The keys of a fitted cell other than `symmetry`, in the order they are documented.
 pub(super) const SYMMETRIC_KEYS: [&str; 6] = [
     "fit",
@@ -172,7 +180,7 @@ impl Checker<'_, '_, '_> {
                     self.error(
                         header.clone(),
                         &format!("cell `{name}` has no source"),
-                        "expected `tpms`, `expr`, `mesh`, `blend` or `minkowski`",
+                        "expected `tpms`, `expr`, `mesh`, `crystal`, `ps`, `blend` or `minkowski`",
                         Some(
                             "add `tpms = \"gyroid\"` for a library surface or \
                              `expr = \"...\"` for a formula in x, y, z",
@@ -281,6 +289,9 @@ impl Checker<'_, '_, '_> {
         let is_mesh = matches!(source, Some((CellSource::Mesh(_), _)))
             || given.iter().any(|(k, ..)| *k == "mesh");
         let mesh_options = self.mesh_options(name, &fields, is_mesh);
+        let is_crystal = matches!(source, Some((CellSource::Crystal(_), _)))
+            || given.iter().any(|(k, ..)| *k == "crystal");
+        let crystal_options = self.crystal_options(name, &fields, is_crystal);
 
         if self.report.len() > before {
             return None;
@@ -291,6 +302,9 @@ impl Checker<'_, '_, '_> {
         {
             mesh.fit_placement = fit_placement;
             mesh.sampling = sampling;
+        }
+        if let (CellSource::Crystal(crystal), Some(options)) = (&mut source, crystal_options) {
+            options.apply(crystal);
         }
         let (references, combination) = match &source {
             CellSource::Blend { .. } | CellSource::Minkowski { .. } => {
@@ -327,6 +341,8 @@ impl Checker<'_, '_, '_> {
             "expr" => self.expression(cell, value).map(CellSource::Expr),
             "blend" => self.blend(cell, value, cells),
             "mesh" => self.mesh_source(cell, value),
+            "crystal" => self.crystal_source(cell, value),
+            "ps" => self.ps_source(cell, value),
             _ => self.minkowski(cell, value, cells),
         }
     }

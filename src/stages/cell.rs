@@ -3,6 +3,7 @@
 //! `tpms = "p"` give the same payload and nothing downstream rebuilds between them.
 
 use latticebuild_geom::field::ScalarField;
+use latticebuild_geom::periodic::{PsModel, PsTerm};
 use latticebuild_geom::{expr, tpms};
 
 use crate::cache::KeyBuilder;
@@ -26,9 +27,11 @@ impl CellStage {
         match &self.source {
             CellSource::Tpms(name) => key.param("tpms", name.as_str()),
             CellSource::Expr(text) => key.param("expr", text.as_str()),
-            CellSource::Blend { .. } | CellSource::Minkowski { .. } | CellSource::Mesh(_) => {
-                key.param("combined", true)
-            }
+            CellSource::Ps(terms) => key.param("ps", ps_payload(terms)),
+            CellSource::Blend { .. }
+            | CellSource::Minkowski { .. }
+            | CellSource::Mesh(_)
+            | CellSource::Crystal(_) => key.param("combined", true),
         }
     }
 
@@ -40,18 +43,33 @@ impl CellStage {
                 .formula
                 .to_string(),
             CellSource::Expr(text) => text.clone(),
-            CellSource::Blend { .. } | CellSource::Minkowski { .. } | CellSource::Mesh(_) => {
-                return Err("blends, Minkowski combinations and meshes have no formula".into());
+            CellSource::Ps(terms) => return Ok(ps_payload(terms)),
+            CellSource::Blend { .. }
+            | CellSource::Minkowski { .. }
+            | CellSource::Mesh(_)
+            | CellSource::Crystal(_) => {
+                return Err(
+                    "blends, Minkowski combinations, meshes and crystals have no formula".into(),
+                );
             }
         };
         Ok(formula.into_bytes())
     }
 }
 
-/// The field of a cell payload: a mesh cell's (see [`super::mesh`]) or a formula's.
+/// The payload of an explicit PS model: the same as a crystal cell's.
+fn ps_payload(terms: &[PsTerm]) -> Vec<u8> {
+    super::crystal::encode(&PsModel::new(terms.to_vec()))
+}
+
+/// The field of a cell payload: a mesh cell's (see [`super::mesh`]), a PS model's (see
+/// [`super::crystal`]) or a formula's.
 pub fn cell_field(payload: &[u8]) -> Result<Box<dyn ScalarField>, String> {
     if super::mesh::is_mesh_cell(payload) {
         return super::mesh::mesh_cell_field(payload);
+    }
+    if super::crystal::is_ps_cell(payload) {
+        return super::crystal::ps_cell_field(payload);
     }
     let text = std::str::from_utf8(payload).map_err(|_| "cell formula is not UTF-8".to_string())?;
     let compiled =

@@ -12,6 +12,7 @@
 //! | `file`    | — (the builder reads the file; its hash is the content's) | —            | the file's bytes (not cached) |
 //! | `cell`    | source kind, TPMS name or expression text               | —              | canonical formula text |
 //! | `mesh`    | format, placement, sample                               | file bytes     | placed soup ([`mesh`]), the `cell:` node of a mesh cell |
+//! | `crystal` | format, species, tolerance, max_scale, include_images, optimize | file bytes | PS model ([`crystal`]), the `cell:` node of a crystal cell |
 //! | `contour` | domain, cell size, solid, offset, thickness, samples, within, skin | cell payload (+ part file) | mesh + its check ([`artifact`]) |
 //! | `sample`  | group, N, mirror, symmetrize                            | cell payload   | `N^d` samples of the sampling domain |
 //! | `fit`     | group, N (or tolerance, mirror, symmetrize for `auto`)  | samples (or cell payload for `auto`) | coefficient table (JSON) |
@@ -24,6 +25,7 @@
 pub mod artifact;
 pub mod cell;
 pub mod contour;
+pub mod crystal;
 pub mod mesh;
 pub mod sdf;
 pub mod symmetric;
@@ -41,6 +43,7 @@ pub enum Stage {
     File(mesh::FileStage),
     Cell(cell::CellStage),
     MeshCell(mesh::MeshCellStage),
+    Crystal(crystal::CrystalStage),
     Sample(symmetric::SampleStage),
     Fit(symmetric::FitStage),
     Combine(symmetric::CombineStage),
@@ -69,6 +72,7 @@ impl Stage {
             Stage::File(_) => "file",
             Stage::Cell(_) => "cell",
             Stage::MeshCell(_) => "mesh",
+            Stage::Crystal(_) => "crystal",
             Stage::Sample(_) => "sample",
             Stage::Fit(_) => "fit",
             Stage::Combine(s) => s.kind(),
@@ -84,6 +88,7 @@ impl Stage {
         match self {
             Stage::Cell(_) => cell::VERSION,
             Stage::File(_) | Stage::MeshCell(_) => mesh::VERSION,
+            Stage::Crystal(_) => crystal::VERSION,
             Stage::Sample(_) | Stage::Fit(_) | Stage::Combine(_) | Stage::Constrain(_) => {
                 symmetric::VERSION
             }
@@ -100,6 +105,7 @@ impl Stage {
             Stage::File(_) => builder,
             Stage::Cell(s) => s.key_params(builder),
             Stage::MeshCell(s) => s.key_params(builder),
+            Stage::Crystal(s) => s.key_params(builder),
             Stage::Sample(s) => s.key_params(builder),
             Stage::Fit(s) => s.key_params(builder),
             Stage::Combine(s) => s.key_params(builder),
@@ -120,6 +126,7 @@ impl Stage {
         match self {
             Stage::File(_) | Stage::Cell(_) => format!("input {i}"),
             Stage::MeshCell(_) => "mesh file".into(),
+            Stage::Crystal(_) => "crystal file".into(),
             Stage::Sample(_) => "formula".into(),
             Stage::Fit(s) if s.reads_samples() => "samples".into(),
             Stage::Fit(_) => "formula".into(),

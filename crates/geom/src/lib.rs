@@ -18,6 +18,7 @@ pub mod mesh;
 pub mod mesh_io;
 pub mod mesh_read;
 pub mod mesh_sdf;
+pub mod periodic;
 pub mod scaffold;
 pub mod sdf;
 pub mod spelling;

@@ -1,0 +1,310 @@
+//! The schema of periodic-surface cells: `crystal = "file.cif"` with `species` and
+//! `reconstruct = { tolerance, max_scale, include_images, optimize }`, and explicit models
+//! `ps = { terms = [{ moment, scale, vector = [a, b, c, θ] }, …] }`.
+//!
+//! A child of `schema.rs` (it extends its `Checker`). Invariants:
+//! - No IO: the crystal file's name is resolved against the manifest's directory and its
+//!   extension checked; whether it exists is checked when a manifest is loaded from disk.
+//! - `species` and `reconstruct` are errors on a cell without `crystal`, naming what is
+//!   missing; every term of `ps` is checked, and each error points at the term's value.
+
+use latticebuild_geom::periodic::PsTerm;
+use toml::de::DeValue;
+
+use super::super::model::{CellSource, CrystalCell, MeshFile};
+use super::{Checker, Fields, Value, list};
+
+/// File extensions of the crystal readers, lower case.
+const CRYSTAL_EXTENSIONS: [&str; 3] = ["cif", "xyz", "extxyz"];
+const RECONSTRUCT_KEYS: [&str; 4] = ["tolerance", "max_scale", "include_images", "optimize"];
+const PS_KEYS: [&str; 1] = ["terms"];
+const TERM_KEYS: [&str; 3] = ["moment", "scale", "vector"];
+/// The largest `max_scale` (scales 1, 2, …, 64: seven steps of the search).
+const MAX_SCALE: i64 = 64;
+
+/// `species` and `reconstruct` of a crystal cell.
+pub(super) struct CrystalOptions {
+    species: Option<String>,
+    tolerance: f64,
+    max_scale: u32,
+    include_images: bool,
+    optimize: bool,
+}
+
+impl CrystalOptions {
+    pub(super) fn apply(self, cell: &mut CrystalCell) {
+        cell.species = self.species;
+        cell.tolerance = self.tolerance;
+        cell.max_scale = self.max_scale;
+        cell.include_images = self.include_images;
+        cell.optimize = self.optimize;
+    }
+}
+
+impl Checker<'_, '_, '_> {
+    /// `crystal = "file"`: a cell source; its options are filled in by
+    /// [`Checker::crystal_options`].
+    pub(super) fn crystal_source(&mut self, cell: &str, value: &Value<'_>) -> Option<CellSource> {
+        let key = format!("cells.{cell}.crystal");
+        let given = self.string(&key, value)?;
+        let extension = std::path::Path::new(given)
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        if extension
+            .as_deref()
+            .is_none_or(|e| !CRYSTAL_EXTENSIONS.contains(&e))
+        {
+            let shown = extension.map_or("no extension".to_string(), |e| format!("`.{e}`"));
+            self.error(
+                value.span(),
+                &format!("`{key}` is not a crystal file the readers know"),
+                &format!("{shown}; expected {}", list(&CRYSTAL_EXTENSIONS)),
+                Some("give a CIF file, or extended XYZ with a `Lattice=\"…\"`"),
+            );
+            return None;
+        }
+        Some(CellSource::Crystal(CrystalCell {
+            file: MeshFile {
+                given: given.to_string(),
+                path: self.root.join(given),
+                span: value.span(),
+            },
+            species: None,
+            tolerance: 1e-9,
+            max_scale: 8,
+            include_images: false,
+            optimize: false,
+        }))
+    }
+
+    /// `species` and `reconstruct` of a cell: the options of a crystal cell, and an error for
+    /// each of them given to another cell.
+    pub(super) fn crystal_options(
+        &mut self,
+        cell: &str,
+        fields: &Fields<'_, '_>,
+        is_crystal: bool,
+    ) -> Option<CrystalOptions> {
+        let path = |k: &str| format!("cells.{cell}.{k}");
+        if !is_crystal {
+            for k in ["species", "reconstruct"] {
+                if let Some((key, _)) = fields.get(k) {
+                    self.error(
+                        key.span(),
+                        &format!("`{}` applies only to crystal cells", path(k)),
+                        &format!("cell `{cell}` has no `crystal`"),
+                        Some(&format!(
+                            "remove `{k}`, or give the cell a `crystal = \"structure.cif\"`"
+                        )),
+                    );
+                }
+            }
+            return None;
+        }
+        let species = match fields.get("species") {
+            None => Some(None),
+            Some((_, v)) => {
+                let key = path("species");
+                let text = self.string(&key, v);
+                match text {
+                    Some(t) if !t.is_empty() && t.chars().all(|c| c.is_ascii_alphabetic()) => {
+                        Some(Some(t.to_string()))
+                    }
+                    Some(t) => {
+                        self.error(
+                            v.span(),
+                            &format!("`{key}` must be an element symbol"),
+                            &format!("found `{t}`"),
+                            Some("write the element as in the file, like `species = \"Si\"`"),
+                        );
+                        None
+                    }
+                    None => None,
+                }
+            }
+        };
+        let mut options = CrystalOptions {
+            species: None,
+            tolerance: 1e-9,
+            max_scale: 8,
+            include_images: false,
+            optimize: false,
+        };
+        let mut ok = true;
+        if let Some((_, v)) = fields.get("reconstruct") {
+            let key = path("reconstruct");
+            let example = "{ tolerance = 1e-9, max_scale = 8 }";
+            match self.table(&key, v, &format!("write it as `reconstruct = {example}`")) {
+                None => ok = false,
+                Some(table) => {
+                    let within = format!("in `{key}`");
+                    let inner = self.fields(table, &RECONSTRUCT_KEYS, &within);
+                    let sub = |k: &str| format!("{key}.{k}");
+                    if let Some((_, t)) = inner.get("tolerance") {
+                        match self.positive_number(&sub("tolerance"), t, "a number") {
+                            Some(t) => options.tolerance = t,
+                            None => ok = false,
+                        }
+                    }
+                    if let Some((_, m)) = inner.get("max_scale") {
+                        match self.max_scale(&sub("max_scale"), m) {
+                            Some(m) => options.max_scale = m,
+                            None => ok = false,
+                        }
+                    }
+                    for (k, slot) in [
+                        ("include_images", &mut options.include_images),
+                        ("optimize", &mut options.optimize),
+                    ] {
+                        if let Some((_, b)) = inner.get(k) {
+                            match self.boolean(&sub(k), b) {
+                                Some(b) => *slot = b,
+                                None => ok = false,
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        options.species = species?;
+        ok.then_some(options)
+    }
+
+    fn max_scale(&mut self, key: &str, value: &Value<'_>) -> Option<u32> {
+        let DeValue::Integer(int) = value.get_ref() else {
+            self.wrong_type(key, value, "an integer", None);
+            return None;
+        };
+        let n = i64::from_str_radix(int.as_str(), int.radix()).ok();
+        match n {
+            Some(n) if (1..=MAX_SCALE).contains(&n) => u32::try_from(n).ok(),
+            _ => {
+                let shown = self.raw(value);
+                self.error(
+                    value.span(),
+                    &format!("`{key}` must be between 1 and {MAX_SCALE}"),
+                    &format!("found `{shown}`"),
+                    Some("the search tries scales 1, 2, 4, … up to `max_scale`"),
+                );
+                None
+            }
+        }
+    }
+
+    /// `ps = { terms = [...] }`: every term checked.
+    pub(super) fn ps_source(&mut self, cell: &str, value: &Value<'_>) -> Option<CellSource> {
+        let key = format!("cells.{cell}.ps");
+        let example = "{ terms = [{ moment = 1.0, scale = 1, vector = [1, 0, 0, 0] }] }";
+        let table = self.table(&key, value, &format!("write it as `ps = {example}`"))?;
+        let within = format!("in `{key}`");
+        let fields = self.fields(table, &PS_KEYS, &within);
+        let Some((_, terms)) = fields.get("terms") else {
+            let help = format!("write it as `ps = {example}`");
+            self.missing(
+                &fields,
+                &value.span(),
+                "terms",
+                &within,
+                "missing `terms`",
+                &help,
+            );
+            return None;
+        };
+        let tkey = format!("{key}.terms");
+        let DeValue::Array(items) = terms.get_ref() else {
+            self.wrong_type(&tkey, terms, "an array of term tables", None);
+            return None;
+        };
+        if items.is_empty() {
+            self.error(
+                terms.span(),
+                &format!("`{tkey}` is empty"),
+                "expected at least one term",
+                Some("add `{ moment = 1.0, scale = 1, vector = [1, 0, 0, 0] }`"),
+            );
+            return None;
+        }
+        let checked: Vec<Option<PsTerm>> = items
+            .iter()
+            .enumerate()
+            .map(|(i, item)| self.ps_term(&format!("{tkey}[{i}]"), item))
+            .collect();
+        checked
+            .into_iter()
+            .collect::<Option<Vec<_>>>()
+            .map(CellSource::Ps)
+    }
+
+    fn ps_term(&mut self, key: &str, value: &Value<'_>) -> Option<PsTerm> {
+        let example = "{ moment = 1.0, scale = 1, vector = [1, 0, 0, 0] }";
+        let table = self.table(key, value, &format!("write each term as `{example}`"))?;
+        let within = format!("in `{key}`");
+        let fields = self.fields(table, &TERM_KEYS, &within);
+        let moment = match fields.get("moment") {
+            Some((_, v)) => self.finite_number(&format!("{key}.moment"), v),
+            None => {
+                let help = "add `moment = 1.0` (the term's coefficient)";
+                self.missing(
+                    &fields,
+                    &value.span(),
+                    "moment",
+                    &within,
+                    "missing `moment`",
+                    help,
+                );
+                None
+            }
+        };
+        let scale = match fields.get("scale") {
+            Some((_, v)) => self.positive_number(&format!("{key}.scale"), v, "a number"),
+            None => Some(1.0),
+        };
+        let vector = match fields.get("vector") {
+            Some((_, v)) => self.ps_vector(&format!("{key}.vector"), v),
+            None => {
+                let help = "add `vector = [a, b, c, θ]` (the basis plane a x + b y + c z + θ)";
+                self.missing(
+                    &fields,
+                    &value.span(),
+                    "vector",
+                    &within,
+                    "missing `vector`",
+                    help,
+                );
+                None
+            }
+        };
+        Some(PsTerm {
+            moment: moment?,
+            scale: scale?,
+            vector: vector?,
+        })
+    }
+
+    /// `[a, b, c, θ]`, or `[a, b, c]` with θ = 0.
+    fn ps_vector(&mut self, key: &str, value: &Value<'_>) -> Option<[f64; 4]> {
+        let DeValue::Array(items) = value.get_ref() else {
+            self.wrong_type(key, value, "an array of 4 numbers [a, b, c, θ]", None);
+            return None;
+        };
+        if items.len() != 3 && items.len() != 4 {
+            self.error(
+                value.span(),
+                &format!("`{key}` must have 4 values [a, b, c, θ] (or 3, with θ = 0)"),
+                &format!("found {}", items.len()),
+                None,
+            );
+            return None;
+        }
+        let mut vector = [0.0; 4];
+        let mut ok = true;
+        for (slot, item) in vector.iter_mut().zip(items.iter()) {
+            match self.finite_number(key, item) {
+                Some(v) => *slot = v,
+                None => ok = false,
+            }
+        }
+        ok.then_some(vector)
+    }
+}
