@@ -201,7 +201,7 @@ error: cell `a` has no source
  --> lattice.toml:1:1
   |
 1 | [cells.a]
-  | ^^^^^^^^^ expected `tpms`, `expr`, `mesh`, `blend` or `minkowski`
+  | ^^^^^^^^^ expected `tpms`, `expr`, `mesh`, `crystal`, `ps`, `blend` or `minkowski`
   |
   = help: add `tpms = \"gyroid\"` for a library surface or `expr = \"...\"` for a formula in x, y, z
 
@@ -835,7 +835,7 @@ error: cell `c` has no source
  --> --set:1:7
   |
 1 | cells.c.shape=1
-  |       ^ expected `tpms`, `expr`, `mesh`, `blend` or `minkowski`
+  |       ^ expected `tpms`, `expr`, `mesh`, `crystal`, `ps`, `blend` or `minkowski`
   |
   = help: add `tpms = \"gyroid\"` for a library surface or `expr = \"...\"` for a formula in x, y, z
 
@@ -845,7 +845,7 @@ error: unknown key `shape` in cell `c`
 1 | cells.c.shape=1
   |         ^^^^^ unknown key
   |
-  = help: expected one of `tpms`, `expr`, `blend`, `minkowski`, `mesh`, `placement`, `sample`, `symmetry`, `fit`, `extend`, `symmetrize`, `normal_to_faces`, `offset`, `invert`
+  = help: expected one of `tpms`, `expr`, `blend`, `minkowski`, `mesh`, `placement`, `sample`, `crystal`, `species`, `reconstruct`, `ps`, `symmetry`, `fit`, `extend`, `symmetrize`, `normal_to_faces`, `offset`, `invert`
 
 error: could not load `lattice.toml` due to 3 previous errors
 ",
@@ -1281,3 +1281,77 @@ mod symmetry_tests;
 
 #[path = "sdf_tests.rs"]
 mod sdf_tests;
+
+mod crystal_cells {
+    use super::*;
+
+    #[test]
+    fn crystal_and_ps_cells_validate_with_defaults() {
+        let text = "[cells.c]\ncrystal = \"s/FAU.cif\"\nspecies = \"Si\"\n\
+                    reconstruct = { max_scale = 4, include_images = true }\n\
+                    [cells.p]\nps = { terms = [{ moment = 0.5, vector = [1, 1, 1] }, \
+                    { moment = -1, scale = 2, vector = [0, 0, 0, 0.25] }] }\n";
+        let manifest = parse(text, Path::new("m/lattice.toml"), &[]).expect("valid");
+        let CellSource::Crystal(c) = &manifest.cells["c"].source else {
+            panic!("not a crystal cell");
+        };
+        assert_eq!(c.file.path, Path::new("m/s/FAU.cif"));
+        assert_eq!(c.species.as_deref(), Some("Si"));
+        assert_eq!((c.tolerance, c.max_scale), (1e-9, 4));
+        assert!(c.include_images && !c.optimize);
+        let CellSource::Ps(terms) = &manifest.cells["p"].source else {
+            panic!("not a ps cell");
+        };
+        assert_eq!(terms.len(), 2);
+        assert_eq!(terms[0].vector, [1.0, 1.0, 1.0, 0.0]);
+        assert_eq!((terms[1].scale, terms[1].vector[3]), (2.0, 0.25));
+    }
+
+    #[test]
+    fn crystal_and_ps_errors_point_at_their_values() {
+        let text = "[cells.c]\ncrystal = \"FAU.pdb\"\n\
+                    [cells.d]\ncrystal = \"FAU.cif\"\nreconstruct = { max_scale = 0, tolerance = -1 }\n\
+                    [cells.e]\ntpms = \"p\"\nspecies = \"Si\"\n\
+                    [cells.f]\nps = { terms = [{ moment = 1, vector = [1, 0] }, { vector = [1, 0, 0] }] }\n";
+        let errors = parse(text, Path::new("lattice.toml"), &[]).expect_err("invalid");
+        let rendered: Vec<String> = errors
+            .iter()
+            .map(|d| render(std::slice::from_ref(d)))
+            .collect();
+        let all = rendered.join("\n");
+        let expect = [
+            (
+                "`cells.c.crystal` is not a crystal file the readers know",
+                "lattice.toml:2:11",
+            ),
+            (
+                "`cells.d.reconstruct.max_scale` must be between 1 and 64",
+                "lattice.toml:5:29",
+            ),
+            (
+                "`cells.d.reconstruct.tolerance` must be greater than 0",
+                "lattice.toml:5:44",
+            ),
+            (
+                "`cells.e.species` applies only to crystal cells",
+                "lattice.toml:8:1",
+            ),
+            (
+                "`cells.f.ps.terms[0].vector` must have 4 values",
+                "lattice.toml:10:40",
+            ),
+            (
+                "missing key `moment` in `cells.f.ps.terms[1]`",
+                "lattice.toml:10:50",
+            ),
+        ];
+        for (message, at) in expect {
+            let found = rendered
+                .iter()
+                .find(|r| r.contains(message))
+                .unwrap_or_else(|| panic!("no `{message}` in\n{all}"));
+            assert!(found.contains(at), "{message} not at {at}:\n{found}");
+        }
+        assert_eq!(errors.len(), expect.len(), "{all}");
+    }
+}
