@@ -265,6 +265,65 @@ _"#,
     b
 }
 
+fn base64(bytes: &[u8]) -> String {
+    const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for chunk in bytes.chunks(3) {
+        let b = [
+            chunk[0],
+            *chunk.get(1).unwrap_or(&0),
+            *chunk.get(2).unwrap_or(&0),
+        ];
+        let v = u32::from(b[0]) << 16 | u32::from(b[1]) << 8 | u32::from(b[2]);
+        for k in 0..4 {
+            if k <= chunk.len() {
+                out.push(A[(v >> (18 - 6 * k) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+/// VTU with inline base64 binary arrays, UInt32 headers encoded separately from the data (as
+/// VTK writes them), big-endian.
+fn vtu_base64() -> Vec<u8> {
+    let array = |data: Vec<u8>| {
+        let header = (data.len() as u32).to_be_bytes();
+        format!("{}{}", base64(&header), base64(&data))
+    };
+    let points = array(
+        [0., 0., 0., 1., 0., 0., 0., 1., 0., 0., 0., 1., 1., 1., 1.]
+            .iter()
+            .flat_map(|v: &f64| v.to_be_bytes())
+            .collect(),
+    );
+    let conn = array(
+        [0i32, 1, 2, 3, 1, 2, 3, 4]
+            .iter()
+            .flat_map(|v| v.to_be_bytes())
+            .collect(),
+    );
+    let offsets = array([4i32, 8].iter().flat_map(|v| v.to_be_bytes()).collect());
+    let types = array(vec![10u8, 10]);
+    format!(
+        r#"<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="0.1" byte_order="BigEndian">
+<UnstructuredGrid><Piece NumberOfPoints="5" NumberOfCells="2">
+<Points><DataArray type="Float64" NumberOfComponents="3" format="binary">
+  {points}
+</DataArray></Points>
+<Cells>
+<DataArray type="Int32" Name="connectivity" format="binary">{conn}</DataArray>
+<DataArray type="Int32" Name="offsets" format="binary">{offsets}</DataArray>
+<DataArray type="UInt8" Name="types" format="binary">{types}</DataArray>
+</Cells></Piece></UnstructuredGrid></VTKFile>
+"#
+    )
+    .into_bytes()
+}
+
 #[test]
 fn every_format_gives_the_same_two_tets() {
     let (bin, _, _) = msh41_binary();
@@ -276,6 +335,7 @@ fn every_format_gives_the_same_two_tets() {
         ("tbin.vtk", vtk_binary()),
         ("t.vtu", VTU.into()),
         ("tapp.vtu", vtu_appended()),
+        ("t64.vtu", vtu_base64()),
         ("t.inp", INP.into()),
     ];
     for (name, bytes) in &files {
@@ -479,6 +539,7 @@ fn small_files() -> Vec<(&'static str, Vec<u8>)> {
         ("t.vtk", VTK.into()),
         ("tbin.vtk", vtk_binary()),
         ("t.vtu", VTU.into()),
+        ("t64.vtu", vtu_base64()),
         ("tapp.vtu", vtu_appended()),
         ("t.inp", INP.into()),
         (
