@@ -13,6 +13,7 @@
 //!   (0123, 0145, 0347, 1256, 2367, 4567), tet face i is opposite corner i.
 
 use std::fmt;
+use std::sync::OnceLock;
 
 /// A scaffold element type (Gmsh's names and node orders).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -318,8 +319,9 @@ impl ElementKind {
                     2.0 * xi[1],
                     if dim == 3 { 2.0 * xi[2] } else { 0.0 },
                 ];
+                let nodes = &tensor_nodes()[self as usize];
                 for i in 0..n {
-                    let node = self.reference_node(i).map(|c| 2.0 * c);
+                    let node = nodes[i];
                     let (v, g) = match self {
                         ElementKind::Quad8 | ElementKind::Hex20 => serendipity(dim, u, node),
                         ElementKind::Quad4 | ElementKind::Hex8 => multilinear(dim, u, node),
@@ -332,6 +334,19 @@ impl ElementKind {
             }
         }
     }
+}
+
+/// Tensor-product kinds' nodes in u = 2ξ coordinates (±1 or 0), computed once: the map is
+/// evaluated for every output vertex of a tiling.
+fn tensor_nodes() -> &'static [Vec<[f64; 3]>; 10] {
+    static NODES: OnceLock<[Vec<[f64; 3]>; 10]> = OnceLock::new();
+    NODES.get_or_init(|| {
+        ElementKind::ALL.map(|kind| {
+            (0..kind.node_count())
+                .map(|i| kind.reference_node(i).map(|c| 2.0 * c))
+                .collect()
+        })
+    })
 }
 
 impl fmt::Display for ElementKind {

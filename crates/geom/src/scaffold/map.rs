@@ -6,7 +6,8 @@
 //! - Quadrature rules integrate over the reference element of `element.rs` (weights sum to its
 //!   measure: 1 for the cube and square, ⅓ for the tetrahedron, √3/4 for the triangle). The rules
 //!   used by [`Scaffold::measure`] are exact for the polynomial |det J| of every 3D kind and of
-//!   planar 2D kinds; for curved surfaces (a square root) they use 8 points per direction.
+//!   tri3 (constant); other 2D kinds, which may be curved surfaces (a square root), use 8
+//!   points per direction.
 //! - Simplex rules are collapsed (Duffy) tensor Gauss–Legendre rules, all points inside.
 
 use super::{ElementKind, Scaffold};
@@ -180,8 +181,14 @@ impl Scaffold {
 
     /// The rule [`Scaffold::measure`] uses for this scaffold's kind.
     pub fn measure_rule(&self) -> Quadrature {
-        let n = match self.kind.dimension() {
-            3 => 4,
+        // Points per direction for an exact |det J|: tet4/tri3 have a constant Jacobian, but the
+        // Duffy factor (1-u)²(1-v) needs 2 points on the tet (1 on the triangle); tet10's det J
+        // has degree 3 (+2 from Duffy); hex8 degree 2 per axis, hex20/hex27 degree 5. Other 2D
+        // elements may be curved surfaces (a square root): 8 points.
+        let n = match self.kind {
+            ElementKind::Tri3 => 1,
+            ElementKind::Tet4 | ElementKind::Hex8 => 2,
+            ElementKind::Tet10 | ElementKind::Hex20 | ElementKind::Hex27 => 3,
             _ => 8,
         };
         Quadrature::new(self.kind, n)

@@ -282,7 +282,6 @@ impl<'a> Reader<'a> {
             }
             let extra = (parametric * dim) as usize;
             for i in first..first + n {
-                let at = self.cur.mark();
                 let mut p = [0.0; 3];
                 for c in &mut p {
                     *c = self.double("a node coordinate")?;
@@ -291,9 +290,6 @@ impl<'a> Reader<'a> {
                     self.double("a parametric node coordinate")?;
                 }
                 self.raw.nodes[i] = p;
-                if !self.binary {
-                    self.raw.node_at[i] = at;
-                }
             }
         }
         if seen != total {

@@ -80,7 +80,7 @@ fn vtk_local(kind: Option<ElementKind>, i: usize) -> usize {
 fn add_cells(
     raw: &mut RawMesh,
     loc: Locator<'_>,
-    at: usize,
+    cell_at: &dyn Fn(usize) -> usize,
     types: &[i64],
     ends: &[u64],
     connectivity: &[u64],
@@ -88,6 +88,7 @@ fn add_cells(
     let mut type_ids: Vec<(i64, u16)> = Vec::new();
     let mut start = 0u64;
     for (c, (&code, &end)) in types.iter().zip(ends).enumerate() {
+        let at = cell_at(c);
         if end < start || end > connectivity.len() as u64 {
             return Err(loc.error(
                 at,
@@ -179,6 +180,7 @@ pub(super) fn read_legacy(bytes: &[u8], name: &str) -> Result<Scaffold, Scaffold
         ..RawMesh::default()
     };
     let mut cells: Option<(usize, Vec<u64>, Vec<u64>)> = None; // (at, ends, connectivity)
+    let mut cell_starts: Vec<usize> = Vec::new();
     let mut types: Option<Vec<i64>> = None;
     let mut counts_51 = (0usize, 0usize);
     while let Some((at, keyword)) = cur.next_token() {
@@ -221,6 +223,7 @@ pub(super) fn read_legacy(bytes: &[u8], name: &str) -> Result<Scaffold, Scaffold
                 let mut connectivity = Vec::with_capacity(size);
                 for c in 0..n {
                     let cat = cur.mark();
+                    cell_starts.push(cat);
                     let k = legacy_index(&mut cur, binary, Scalar::I32, "a cell's point count")?;
                     let k = cur.check_count(cat, k, "a cell's point count", 2)?;
                     if connectivity.len() + k + c + 1 > size {
@@ -307,7 +310,8 @@ pub(super) fn read_legacy(bytes: &[u8], name: &str) -> Result<Scaffold, Scaffold
             format!("{} cells but {} cell types", ends.len(), types.len()),
         ));
     }
-    add_cells(&mut raw, loc, cells_at, &types, &ends, &connectivity)?;
+    let cell_at = |c: usize| cell_starts.get(c).copied().unwrap_or(cells_at);
+    add_cells(&mut raw, loc, &cell_at, &types, &ends, &connectivity)?;
     raw.finish(loc)
 }
 
@@ -646,7 +650,14 @@ pub(super) fn read_xml(bytes: &[u8], name: &str) -> Result<Scaffold, ScaffoldErr
         .iter()
         .map(|&v| to_index(v, "a cell type", loc, types_array.at).map(|t| t as i64))
         .collect::<Result<_, _>>()?;
-    add_cells(&mut raw, loc, conn_array.at, &types, &ends, &connectivity)?;
+    add_cells(
+        &mut raw,
+        loc,
+        &|_| conn_array.at,
+        &types,
+        &ends,
+        &connectivity,
+    )?;
     for a in arrays
         .iter()
         .filter(|a| a.section == Section::PointData && a.components == 1)
