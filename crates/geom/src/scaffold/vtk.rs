@@ -589,6 +589,14 @@ pub(super) fn read_xml(bytes: &[u8], name: &str) -> Result<Scaffold, ScaffoldErr
     }
     let (piece_at, n_points, n_cells) =
         piece.ok_or_else(|| loc.file_error("no <Piece>: expected one unstructured grid piece"))?;
+    // zlib shrinks data by at most about 1000:1, so no honest file declares more than this.
+    let most = bytes.len().saturating_mul(1100);
+    if n_points.saturating_mul(3) > most || n_cells > most {
+        return Err(loc.error(
+            piece_at,
+            format!("Piece declares {n_points} points and {n_cells} cells, more than a file of {} bytes can hold", bytes.len()),
+        ));
+    }
     let find_array = |sec: Section, name: Option<&str>| {
         arrays
             .iter()
@@ -821,7 +829,7 @@ impl XmlFile<'_> {
                     ),
                 ));
             }
-            let mut out = Vec::with_capacity(expected as usize);
+            let mut out = Vec::with_capacity(expected.min(data.len() as u64 * 1100) as usize);
             for (b, &size) in sizes.iter().enumerate() {
                 let size = usize::try_from(size).map_err(|_| trunc("block"))?;
                 let block = cur
