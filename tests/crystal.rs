@@ -180,3 +180,35 @@ fn crystal_and_ps_cells_build_closed_lattices_keyed_by_content() {
         "{err}"
     );
 }
+
+#[test]
+fn a_ps_cell_fits_onto_the_symmetric_basis() {
+    // Schwarz P written as PS terms is Oh-symmetric and band-limited: fitted with `symmetry`,
+    // it goes through sample → fit → constrain unchanged and still fills half the cell.
+    let project = Project::new(
+        r#"
+[cells.p]
+ps = { terms = [
+    { moment = 1, vector = [1, 0, 0, 0] },
+    { moment = 1, vector = [0, 1, 0, 0] },
+    { moment = 1, vector = [0, 0, 1, 0] },
+] }
+symmetry = "Oh"
+fit = { n = 16 }
+
+[outputs.p]
+cell = "p"
+domain = { min = [0, 0, 0], max = [2, 2, 2] }
+samples = 61
+"#,
+    );
+    let reports = project.build(&[]);
+    let r = &reports.as_array().expect("reports")[0];
+    assert_eq!(r["watertight"], true, "{r}");
+    let fraction = r["volume_fraction"].as_f64().expect("fraction");
+    assert!((fraction - 0.5).abs() < 0.005, "{fraction}");
+    let ran = common::ran(&reports);
+    for stage in ["sample:p", "fit:p", "constrain:p"] {
+        assert!(ran.iter().any(|s| s == stage), "{stage} not in {ran:?}");
+    }
+}
