@@ -11,11 +11,16 @@
 use latticebuild_geom::periodic::PsTerm;
 use toml::de::DeValue;
 
-use super::super::model::{CellSource, CrystalCell, MeshFile};
-use super::{Checker, Fields, Value, list};
+use super::super::model::{CellSource, CrystalCell};
+use super::meshes::FileKind;
+use super::{Checker, Fields, Value};
 
 /// File extensions of the crystal readers, lower case.
-const CRYSTAL_EXTENSIONS: [&str; 3] = ["cif", "xyz", "extxyz"];
+const CRYSTAL_FILES: FileKind = FileKind {
+    extensions: &["cif", "xyz", "extxyz"],
+    noun: "crystal",
+    help: "give a CIF file, or extended XYZ with a `Lattice=\"…\"`",
+};
 const RECONSTRUCT_KEYS: [&str; 4] = ["tolerance", "max_scale", "include_images", "optimize"];
 const PS_KEYS: [&str; 1] = ["terms"];
 const TERM_KEYS: [&str; 3] = ["moment", "scale", "vector"];
@@ -47,29 +52,9 @@ impl Checker<'_, '_, '_> {
     pub(super) fn crystal_source(&mut self, cell: &str, value: &Value<'_>) -> Option<CellSource> {
         let key = format!("cells.{cell}.crystal");
         let given = self.string(&key, value)?;
-        let extension = std::path::Path::new(given)
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase);
-        if extension
-            .as_deref()
-            .is_none_or(|e| !CRYSTAL_EXTENSIONS.contains(&e))
-        {
-            let shown = extension.map_or("no extension".to_string(), |e| format!("`.{e}`"));
-            self.error(
-                value.span(),
-                &format!("`{key}` is not a crystal file the readers know"),
-                &format!("{shown}; expected {}", list(&CRYSTAL_EXTENSIONS)),
-                Some("give a CIF file, or extended XYZ with a `Lattice=\"…\"`"),
-            );
-            return None;
-        }
+        let file = self.input_file(&format!("`{key}`"), given, value.span(), &CRYSTAL_FILES)?;
         Some(CellSource::Crystal(CrystalCell {
-            file: MeshFile {
-                given: given.to_string(),
-                path: self.root.join(given),
-                span: value.span(),
-            },
+            file,
             species: None,
             tolerance: 1e-9,
             max_scale: 8,

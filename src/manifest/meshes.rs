@@ -17,6 +17,20 @@ use super::{Checker, Fields, Value, list};
 
 /// File extensions of the mesh readers, lower case.
 pub(super) const MESH_EXTENSIONS: [&str; 4] = ["stl", "obj", "ply", "off"];
+
+/// A kind of input file: the extensions its readers know, its noun in messages, and a help
+/// line for a file they don't.
+pub(super) struct FileKind {
+    pub extensions: &'static [&'static str],
+    pub noun: &'static str,
+    pub help: &'static str,
+}
+
+pub(super) const MESH_FILES: FileKind = FileKind {
+    extensions: &MESH_EXTENSIONS,
+    noun: "mesh",
+    help: "convert the mesh to STL, OBJ, PLY or OFF",
+};
 const PLACEMENTS: [&str; 2] = ["reference", "fit"];
 const SAMPLINGS: [&str; 2] = ["sdf", "containment"];
 
@@ -134,27 +148,40 @@ impl Checker<'_, '_, '_> {
     /// manifest's directory.
     fn mesh_file(&mut self, key: &str, value: &Value<'_>) -> Option<MeshFile> {
         let given = self.string(key, value)?;
+        self.input_file(&format!("`{key}`"), given, value.span(), &MESH_FILES)
+    }
+
+    /// `given`, named at `span` and described as `what` in messages, as an input file of
+    /// `kind` resolved against the manifest's directory; an error when its extension is not
+    /// one the readers know.
+    pub(super) fn input_file(
+        &mut self,
+        what: &str,
+        given: &str,
+        span: std::ops::Range<usize>,
+        kind: &FileKind,
+    ) -> Option<MeshFile> {
         let extension = std::path::Path::new(given)
             .extension()
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase);
         if extension
             .as_deref()
-            .is_none_or(|e| !MESH_EXTENSIONS.contains(&e))
+            .is_none_or(|e| !kind.extensions.contains(&e))
         {
             let shown = extension.map_or("no extension".to_string(), |e| format!("`.{e}`"));
             self.error(
-                value.span(),
-                &format!("`{key}` is not a mesh file the readers know"),
-                &format!("{shown}; expected {}", list(&MESH_EXTENSIONS)),
-                Some("convert the mesh to STL, OBJ, PLY or OFF"),
+                span,
+                &format!("{what} is not a {} file the readers know", kind.noun),
+                &format!("{shown}; expected {}", list(kind.extensions)),
+                Some(kind.help),
             );
             return None;
         }
         Some(MeshFile {
             given: given.to_string(),
             path: self.root.join(given),
-            span: value.span(),
+            span,
         })
     }
 

@@ -21,8 +21,8 @@ use toml::de::DeValue;
 
 use super::super::expression;
 use super::super::model::{MeshFile, SdfOutput, SdfResolution, voxel_samples};
-use super::meshes::MESH_EXTENSIONS;
-use super::{Checker, DOMAIN_KEYS, Fields, Key, OUTPUT_KEYS, Value, list};
+use super::meshes::MESH_FILES;
+use super::{Checker, DOMAIN_KEYS, Fields, Key, OUTPUT_KEYS, Value};
 
 /// Keys of cell outputs, each with why it does not apply to an SDF output and what to do.
 const CELL_OUTPUT_KEYS: [(&str, &str, &str); 9] = [
@@ -227,30 +227,13 @@ impl Checker<'_, '_, '_> {
             };
             // The path is the word after `file`.
             let span = at(word_span(*n).unwrap_or(0..text.len()));
-            let extension = std::path::Path::new(given)
-                .extension()
-                .and_then(|e| e.to_str())
-                .map(str::to_ascii_lowercase);
-            if extension
-                .as_deref()
-                .is_none_or(|e| !MESH_EXTENSIONS.contains(&e))
-            {
-                let shown = extension.map_or("no extension".to_string(), |e| format!("`.{e}`"));
-                self.error(
-                    span,
-                    &format!("`file {given}` in `{key}` is not a mesh file the readers know"),
-                    &format!("{shown}; expected {}", list(&MESH_EXTENSIONS)),
-                    Some("convert the mesh to STL, OBJ, PLY or OFF"),
-                );
+            let what = format!("`file {given}` in `{key}`");
+            let Some(file) = self.input_file(&what, given, span, &MESH_FILES) else {
                 ok = false;
                 continue;
-            }
+            };
             if files.iter().all(|f| f.given != *given) {
-                files.push(MeshFile {
-                    given: given.clone(),
-                    path: self.root.join(given),
-                    span,
-                });
+                files.push(file);
             }
         }
         ok.then_some((program, files))
