@@ -491,3 +491,15 @@ fn serendipity(dim: usize, u: [f64; 3], node: [f64; 3]) -> (f64, [f64; 3]) {
         }
     }
 }
+
+/// Gmsh's hex corners as 0/1 offsets along x, y, z (corner `i` of every hex kind).
+pub const HEX_CORNERS: [[u32; 3]; 8] = [
+    [0, 0, 0],
+    [1, 0, 0],
+    [1, 1, 0],
+    [0, 1, 0],
+    [0, 0, 1],
+    [1, 0, 1],
+    [1, 1, 1],
+    [0, 1, 1],
+];

@@ -9,7 +9,7 @@
 //!   each square into 2 triangles along the diagonal from its (min, min) corner.
 //! - 2D kinds ignore z (`min[2]`, `max[2]`, `divisions[2]`): their nodes lie in z = 0.
 
-use super::{ElementKind, Location, Scaffold, ScaffoldError};
+use super::{ElementKind, HEX_CORNERS, Location, Scaffold, ScaffoldError};
 
 /// The 6 axis orders of the Kuhn split, with their permutation sign.
 const KUHN: [([usize; 3], bool); 6] = [
@@ -102,17 +102,8 @@ pub fn grid(
                 let at = |o: [usize; 3]| id(i + o[0], j + o[1], k + o[2]);
                 match kind {
                     ElementKind::Hex8 => {
-                        for o in [
-                            [0, 0, 0],
-                            [1, 0, 0],
-                            [1, 1, 0],
-                            [0, 1, 0],
-                            [0, 0, 1],
-                            [1, 0, 1],
-                            [1, 1, 1],
-                            [0, 1, 1],
-                        ] {
-                            connectivity.push(at(o));
+                        for o in HEX_CORNERS {
+                            connectivity.push(at(o.map(|c| c as usize)));
                         }
                     }
                     ElementKind::Tet4 => {

@@ -34,7 +34,7 @@ mod xml;
 use std::fmt;
 
 pub use check::check;
-pub use element::ElementKind;
+pub use element::{ElementKind, HEX_CORNERS};
 pub use facets::{Facet, FacetSide, Facets};
 pub use grid::grid;
 pub use map::{Quadrature, gauss_legendre};

@@ -8,18 +8,7 @@
 use super::lattice::{Lattice, Weights};
 use super::local::{LocalBuilder, LocalMesh, inside};
 use crate::contour::table::{CORNER_SLOT, EDGE_CORNERS, tables};
-
-/// Lattice coordinates (in units of `n − 1`) of Gmsh's hex corners.
-pub const HEX_CORNERS: [[u32; 3]; 8] = [
-    [0, 0, 0],
-    [1, 0, 0],
-    [1, 1, 0],
-    [0, 1, 0],
-    [0, 0, 1],
-    [1, 0, 1],
-    [1, 1, 1],
-    [0, 1, 1],
-];
+pub use crate::scaffold::HEX_CORNERS;
 
 pub struct CubeLattice {
     /// Points per edge.
