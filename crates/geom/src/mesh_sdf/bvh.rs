@@ -93,9 +93,10 @@ impl Node {
         [u, cross(n, u), n]
     }
 
-    /// A lower bound on the squared distance from `p` to the node's triangles. Shrunk by 1e-6
-    /// because the `f32` axes are orthonormal only to about 1e-7.
-    #[inline]
+    /// A lower bound on the squared distance from `p` to the node's triangles, in `f64` (the
+    /// searches compute it in `f32` lanes, `nearest.rs`). Shrunk by 1e-6 because the `f32`
+    /// axes are orthonormal only to about 1e-7.
+    #[cfg(test)]
     pub(super) fn dist2(&self, p: V3) -> f64 {
         let mut d2 = 0.0;
         for (axis, [lo, hi]) in self.axes().iter().zip(self.extent) {
@@ -104,6 +105,12 @@ impl Node {
             d2 += d * d;
         }
         d2 * (1.0 - 1e-6)
+    }
+
+    /// The stored frame and extents, as they are (`f32`): `(u, n, extent)`.
+    #[inline(always)]
+    pub(super) fn frame(&self) -> ([f32; 3], [f32; 3], [[f32; 2]; 3]) {
+        (self.u, self.n, self.extent)
     }
 
     /// Sets the frame `u, n` and the box of `points` in it.
@@ -160,6 +167,9 @@ pub(super) struct Bvh {
     pub bounds: (V3, V3),
     /// The triangles in leaf order.
     pub triangles: Vec<Tri>,
+    /// The largest `|x| + |y| + |z|` of the triangles' points: the scale of the rounding in
+    /// `f32` box bounds.
+    pub reach: f64,
 }
 
 #[derive(Clone, Copy)]
@@ -218,6 +228,7 @@ pub(super) fn build(triangles: Vec<Tri>) -> Bvh {
         boxes,
         triangles: ordered,
         bounds: (lo, hi),
+        reach: (0..3).map(|a| lo[a].abs().max(hi[a].abs())).sum(),
     }
 }
 

@@ -212,7 +212,13 @@ impl MeshSdf {
     /// Distance from `p` to the nearest triangle, clamped to the band if there is one.
     pub fn unsigned_distance(&self, p: [f64; 3]) -> f64 {
         let band = self.options.band.unwrap_or(f64::INFINITY);
-        let (d2, tri) = nearest::nearest(&self.bvh, p, None, band * band, &mut Vec::new());
+        let (d2, tri) = nearest::nearest(
+            &self.bvh,
+            p,
+            None,
+            band * band,
+            &mut nearest::Search::default(),
+        );
         if tri.is_some() { d2.sqrt() } else { band }
     }
 

@@ -14,7 +14,7 @@
 //! boundary of a sliver the two cases meet continuously, so a misjudged sign test costs only
 //! rounding.
 
-use super::bvh::{Bvh, MAX_DEPTH};
+use super::bvh::{Bvh, MAX_DEPTH, Node};
 use super::prepare::Tri;
 use super::vec3::{V3, cross, dot, sub};
 
@@ -61,65 +61,280 @@ pub(super) fn triangle_dist2(t: &Tri, p: V3) -> f64 {
     best
 }
 
-/// The nearest triangle to `p` closer than `sqrt(bound2)`: its squared distance and index in
-/// `bvh.triangles`, or `(bound2, None)` when there is none. `hint`, a triangle likely to be
-/// near (the previous query's answer), tightens the bound before the descent. `stack` is
-/// scratch space, reused across queries.
+/// `x` as `f32`, rounded up.
+#[inline(always)]
+fn up(x: f64) -> f32 {
+    let r = x as f32;
+    if f64::from(r) < x { r.next_up() } else { r }
+}
+
+/// Points searched together by one [`Search`]: neighbours in a grid column, whose searches
+/// open mostly the same nodes. One `f32` SIMD register holds a bound for each.
+pub(super) const LANES: usize = 4;
+
+type Lanes = [f32; LANES];
+
+/// A node waiting on a search's stack: its index, what its visit reads (`first`, `count` as
+/// in [`Node`]), and its distance bound for each lane.
+#[derive(Clone, Copy)]
+struct Entry {
+    index: u32,
+    first: u32,
+    count: u32,
+    bound: Lanes,
+}
+
+/// Asks for the memory that visiting `entry` will read: both children, or its triangles.
+/// Needs nothing from the node itself, so it never waits.
+#[inline(always)]
+fn prefetch(bvh: &Bvh, entry: &Entry) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        // SAFETY: a prefetch is a hint that never faults, whatever the address.
+        unsafe {
+            if entry.count > 0 {
+                let t: *const i8 = bvh
+                    .triangles
+                    .as_ptr()
+                    .wrapping_add(entry.first as usize)
+                    .cast();
+                let bytes = entry.count as usize * std::mem::size_of::<Tri>();
+                for line in (0..bytes + 63).step_by(64) {
+                    _mm_prefetch(t.wrapping_add(line), _MM_HINT_T0);
+                }
+            } else {
+                let n = bvh.nodes.as_ptr();
+                _mm_prefetch(n.wrapping_add(entry.index as usize + 1).cast(), _MM_HINT_T0);
+                _mm_prefetch(n.wrapping_add(entry.first as usize).cast(), _MM_HINT_T0);
+            }
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (bvh, entry);
+}
+
+#[inline(always)]
+fn max(a: Lanes, b: Lanes) -> Lanes {
+    std::array::from_fn(|i| if a[i] > b[i] { a[i] } else { b[i] })
+}
+
+/// The lanes' points in `f32`, and the slack that covers their rounding.
+#[derive(Clone, Copy, Default)]
+struct Points {
+    x: Lanes,
+    y: Lanes,
+    z: Lanes,
+    slack: f32,
+}
+
+/// Lower bounds on the squared distances from the lanes' points to `node`'s triangles.
+#[inline(always)]
+fn lower_bounds(node: &Node, q: &Points) -> Lanes {
+    let (u, n, extent) = node.frame();
+    let v = [
+        n[1] * u[2] - n[2] * u[1],
+        n[2] * u[0] - n[0] * u[2],
+        n[0] * u[1] - n[1] * u[0],
+    ];
+    let mut acc = [0.0f32; LANES];
+    for (a, [lo, hi]) in [u, v, n].iter().zip(extent) {
+        let s: Lanes = std::array::from_fn(|i| a[0] * q.x[i] + a[1] * q.y[i] + a[2] * q.z[i]);
+        let below: Lanes = std::array::from_fn(|i| (lo - q.slack) - s[i]);
+        let above: Lanes = std::array::from_fn(|i| s[i] - (hi + q.slack));
+        let d = max(max(below, above), [0.0; LANES]);
+        for i in 0..LANES {
+            acc[i] += d[i] * d[i];
+        }
+    }
+    acc.map(|a| a * (1.0 - 1e-5))
+}
+
+/// Whether some lane's bound is below its best.
+#[inline(always)]
+fn open(bound: &Lanes, best: &Lanes) -> bool {
+    (0..LANES).fold(false, |any, i| any | (bound[i] < best[i]))
+}
+
+/// The least bound among the open lanes (`INFINITY` when none is open).
+#[inline(always)]
+fn nearest_open(bound: &Lanes, best: &Lanes) -> f32 {
+    (0..LANES).fold(f32::INFINITY, |m, i| {
+        if bound[i] < best[i] && bound[i] < m {
+            bound[i]
+        } else {
+            m
+        }
+    })
+}
+
+/// Nearest-triangle searches for up to [`LANES`] points at once, advanced a node at a time
+/// so that several can be interleaved ([`nearest_many`]).
+///
+/// One node load serves every lane, and its box is tested against all lanes in one SIMD
+/// pass. Box bounds are computed in `f32`: points are rounded to `f32`, every extent is
+/// widened by a slack of 32 ulps of the largest coordinate sum in play (the rounding of the
+/// points, of the derived axis `v` and of the projections is below 8), and squared sums are
+/// shrunk by 1e-5 relative (rounding of the squares, near-orthonormality of the stored
+/// frame). A lane is pruned only against its own best squared distance rounded up to `f32`.
+/// So bounds never exceed true distances, and each lane's result is the exact minimum of the
+/// `f64` point–triangle distances over all triangles (which of exactly tied triangles it
+/// names may depend on its neighbours). Unused lanes have a best of −∞: never open.
+pub(super) struct Search {
+    p: [V3; LANES],
+    q: Points,
+    best2: [f64; LANES],
+    best_up: Lanes,
+    best: [Option<u32>; LANES],
+    stack: Vec<Entry>,
+}
+
+impl Default for Search {
+    fn default() -> Search {
+        Search {
+            p: [[0.0; 3]; LANES],
+            q: Points::default(),
+            best2: [0.0; LANES],
+            best_up: [f32::NEG_INFINITY; LANES],
+            best: [None; LANES],
+            stack: Vec::with_capacity(MAX_DEPTH + 2),
+        }
+    }
+}
+
+impl Search {
+    /// Starts searches for the nearest triangles to `points` (at most [`LANES`]) closer
+    /// than `sqrt(bound2)`; `hints[i]`, a triangle likely to be near point `i` (its previous
+    /// neighbour's answer), tightens its bound first.
+    pub(super) fn start(&mut self, bvh: &Bvh, points: &[V3], hints: &[Option<u32>], bound2: f64) {
+        debug_assert!(points.len() <= LANES && hints.len() == points.len());
+        self.best_up = [f32::NEG_INFINITY; LANES];
+        let mut reach = bvh.reach;
+        for (i, (&p, &hint)) in points.iter().zip(hints).enumerate() {
+            self.p[i] = p;
+            self.best2[i] = bound2;
+            self.best[i] = None;
+            if let Some(h) = hint {
+                let d2 = triangle_dist2(&bvh.triangles[h as usize], p);
+                if d2 < bound2 {
+                    self.best2[i] = d2;
+                    self.best[i] = Some(h);
+                }
+            }
+            self.best_up[i] = up(self.best2[i]);
+            self.q.x[i] = p[0] as f32;
+            self.q.y[i] = p[1] as f32;
+            self.q.z[i] = p[2] as f32;
+            reach = reach.max(p[0].abs() + p[1].abs() + p[2].abs() + bvh.reach);
+        }
+        self.q.slack = (32.0 * f64::from(f32::EPSILON) * reach) as f32;
+        self.stack.clear();
+        // A NaN point has NaN bounds, never below anything: its lane closes at once.
+        let root = &bvh.nodes[0];
+        let entry = Entry {
+            index: 0,
+            first: root.first,
+            count: root.count,
+            bound: lower_bounds(root, &self.q),
+        };
+        if open(&entry.bound, &self.best_up) {
+            self.stack.push(entry);
+            prefetch(bvh, &entry);
+        }
+    }
+
+    /// Lane `i`'s result: the squared distance and index in `bvh.triangles` of the nearest
+    /// triangle, or `(bound2, None)` when none is closer than the bound.
+    pub(super) fn result(&self, i: usize) -> (f64, Option<u32>) {
+        (self.best2[i], self.best[i])
+    }
+
+    /// Visits one node; false once the search is over.
+    #[inline(always)]
+    fn step(&mut self, bvh: &Bvh) -> bool {
+        let Some(entry) = self.stack.pop() else {
+            return false;
+        };
+        if open(&entry.bound, &self.best_up) {
+            self.visit(bvh, entry);
+        }
+        // By the time this search steps again, what its next visit reads is on its way.
+        if let Some(next) = self.stack.last() {
+            prefetch(bvh, next);
+        }
+        true
+    }
+
+    #[inline(always)]
+    fn visit(&mut self, bvh: &Bvh, entry: Entry) {
+        if entry.count > 0 {
+            for k in entry.first..entry.first + entry.count {
+                let t = &bvh.triangles[k as usize];
+                for i in 0..LANES {
+                    if entry.bound[i] < self.best_up[i] {
+                        let d2 = triangle_dist2(t, self.p[i]);
+                        if d2 < self.best2[i] {
+                            self.best2[i] = d2;
+                            self.best[i] = Some(k);
+                            self.best_up[i] = up(d2);
+                        }
+                    }
+                }
+            }
+            return;
+        }
+        let child = |index: u32| {
+            let node = &bvh.nodes[index as usize];
+            Entry {
+                index,
+                first: node.first,
+                count: node.count,
+                bound: lower_bounds(node, &self.q),
+            }
+        };
+        let (l, r) = (child(entry.index + 1), child(entry.first));
+        let (nl, nr) = (
+            nearest_open(&l.bound, &self.best_up),
+            nearest_open(&r.bound, &self.best_up),
+        );
+        // Visit the nearer child first: push it last.
+        let ((near, dn), (far, df)) = if nl <= nr {
+            ((l, nl), (r, nr))
+        } else {
+            ((r, nr), (l, nl))
+        };
+        if df < f32::INFINITY {
+            self.stack.push(far);
+        }
+        if dn < f32::INFINITY {
+            self.stack.push(near);
+        }
+    }
+}
+
+/// Runs `searches` (each [`Search::start`]ed) to the end, a node of each in turn: the
+/// searches are independent, so their memory loads overlap instead of waiting in line.
+pub(super) fn nearest_many(bvh: &Bvh, searches: &mut [Search]) {
+    let mut running = searches.len();
+    while running > 0 {
+        running = 0;
+        for s in searches.iter_mut() {
+            running += usize::from(s.step(bvh));
+        }
+    }
+}
+
+/// The nearest triangle to `p` closer than `sqrt(bound2)` ([`Search`]), alone.
 pub(super) fn nearest(
     bvh: &Bvh,
     p: V3,
     hint: Option<u32>,
     bound2: f64,
-    stack: &mut Vec<(u32, f64)>,
+    search: &mut Search,
 ) -> (f64, Option<u32>) {
-    let mut best2 = bound2;
-    let mut best = None;
-    if let Some(h) = hint {
-        let d2 = triangle_dist2(&bvh.triangles[h as usize], p);
-        if d2 < best2 {
-            best2 = d2;
-            best = Some(h);
-        }
-    }
-    let nodes = &bvh.nodes;
-    let root = &nodes[0];
-    stack.clear();
-    let d2 = root.dist2(p);
-    if d2 < best2 {
-        stack.push((0, d2));
-    }
-    while let Some((i, d2)) = stack.pop() {
-        if d2 >= best2 {
-            continue;
-        }
-        let node = &nodes[i as usize];
-        if node.is_leaf() {
-            for k in node.first..node.first + node.count {
-                let d2 = triangle_dist2(&bvh.triangles[k as usize], p);
-                if d2 < best2 {
-                    best2 = d2;
-                    best = Some(k);
-                }
-            }
-            continue;
-        }
-        let (l, r) = (i + 1, node.first);
-        let dl = nodes[l as usize].dist2(p);
-        let dr = nodes[r as usize].dist2(p);
-        // Visit the nearer child first: push it last.
-        let (near, far) = if dl <= dr {
-            ((l, dl), (r, dr))
-        } else {
-            ((r, dr), (l, dl))
-        };
-        if far.1 < best2 {
-            stack.push(far);
-        }
-        if near.1 < best2 {
-            stack.push(near);
-        }
-    }
-    (best2, best)
+    search.start(bvh, &[p], &[hint], bound2);
+    while search.step(bvh) {}
+    search.result(0)
 }
 
 /// Whether some triangle's bounding box meets the box `[lo, hi]`: a cheap, conservative test
@@ -152,4 +367,109 @@ pub(super) fn any_box_overlap(bvh: &Bvh, lo: V3, hi: V3) -> bool {
         }
     }
     false
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::bvh::build;
+    use super::*;
+
+    /// A small deterministic generator (no dependency for tests).
+    struct Lcg(u64);
+
+    impl Lcg {
+        fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// A smooth closed surface (a bumpy sphere) of about `2 n²` triangles, centred at `centre`:
+    /// many near ties for points far away, and leaves with oriented boxes.
+    fn bumpy_sphere(n: usize, centre: V3, radius: f64) -> Vec<Tri> {
+        let point = |i: usize, j: usize| {
+            let (theta, phi) = (
+                std::f64::consts::PI * i as f64 / n as f64,
+                std::f64::consts::TAU * j as f64 / n as f64,
+            );
+            let r = radius * (1.0 + 0.05 * (3.0 * phi).sin() * theta.sin());
+            [
+                centre[0] + r * theta.sin() * phi.cos(),
+                centre[1] + r * theta.sin() * phi.sin(),
+                centre[2] + r * theta.cos(),
+            ]
+        };
+        let mut tris = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                let (a, b, c, d) = (
+                    point(i, j),
+                    point(i + 1, j),
+                    point(i + 1, j + 1),
+                    point(i, j + 1),
+                );
+                tris.push([a, b, c]);
+                tris.push([a, c, d]);
+            }
+        }
+        tris
+    }
+
+    /// Every search — alone, in lanes, interleaved, with good, bad and no hints, with and
+    /// without a bound — finds exactly the least distance over all triangles, also far from
+    /// the origin where the `f32` boxes round coarsely.
+    #[test]
+    fn searches_find_the_exhaustive_minimum_bit_for_bit() {
+        let mut rng = Lcg(7);
+        for centre in [[0.0; 3], [1000.0, -2000.0, 500.0]] {
+            let tris = bumpy_sphere(40, centre, 1.0);
+            let bvh = build(tris);
+            let exhaustive = |p: V3| {
+                bvh.triangles
+                    .iter()
+                    .map(|t| triangle_dist2(t, p))
+                    .fold(f64::INFINITY, f64::min)
+            };
+            let points: Vec<V3> = (0..203)
+                .map(|_| std::array::from_fn(|a| centre[a] + 4.0 * rng.next() - 2.0))
+                .collect();
+            let expected: Vec<f64> = points.iter().map(|&p| exhaustive(p)).collect();
+            let mut alone = Search::default();
+            for (k, &p) in points.iter().enumerate() {
+                let hint = Some((k * 37 % bvh.triangles.len()) as u32);
+                for h in [None, hint] {
+                    let (d2, t) = nearest(&bvh, p, h, f64::INFINITY, &mut alone);
+                    assert_eq!(d2.to_bits(), expected[k].to_bits(), "point {p:?}");
+                    let t = t.expect("a nearest triangle");
+                    assert_eq!(triangle_dist2(&bvh.triangles[t as usize], p), d2);
+                }
+                // Bounded: the same when the minimum is inside the bound, none otherwise.
+                let bound2 = 0.25;
+                let (d2, t) = nearest(&bvh, p, None, bound2, &mut alone);
+                if expected[k] < bound2 {
+                    assert_eq!((d2.to_bits(), t.is_some()), (expected[k].to_bits(), true));
+                } else {
+                    assert_eq!((d2, t), (bound2, None));
+                }
+            }
+            // Lanes of neighbouring points (partly filled at the end), interleaved.
+            let mut searches: Vec<Search> = (0..5).map(|_| Search::default()).collect();
+            for group in points.chunks(LANES * searches.len()) {
+                let lanes: Vec<&[V3]> = group.chunks(LANES).collect();
+                for (search, pts) in searches.iter_mut().zip(&lanes) {
+                    let hints: Vec<Option<u32>> = pts.iter().map(|_| Some(0)).collect();
+                    search.start(&bvh, pts, &hints, f64::INFINITY);
+                }
+                nearest_many(&bvh, &mut searches[..lanes.len()]);
+                for (s, pts) in searches.iter().zip(&lanes) {
+                    for (i, &p) in pts.iter().enumerate() {
+                        assert_eq!(s.result(i).0.to_bits(), exhaustive(p).to_bits());
+                    }
+                }
+            }
+        }
+    }
 }
