@@ -221,7 +221,7 @@ fn tile_with(
         let local = lattice.contour(&values);
         return weld(elements, lattice, Locals::Uniform(&local));
     }
-    let samples = ElementSamples::new(lattice, solid, cell, skin);
+    let samples = ElementSamples::new(lattice, solid, cell).with_skin(skin);
     let locals: Vec<local::LocalMesh> = (0..elements.count())
         .into_par_iter()
         .map_init(
@@ -247,15 +247,10 @@ struct ElementSamples<'s> {
 }
 
 impl<'s> ElementSamples<'s> {
-    fn new(
-        lattice: &dyn Lattice,
-        solid: &'s TiledSolid<'s>,
-        cell: Vec<f64>,
-        skin: Option<&'s Skin>,
-    ) -> Self {
+    fn new(lattice: &dyn Lattice, solid: &'s TiledSolid<'s>, cell: Vec<f64>) -> Self {
         ElementSamples {
             solid,
-            skin,
+            skin: None,
             cell,
             to: solid
                 .transition
@@ -265,6 +260,11 @@ impl<'s> ElementSamples<'s> {
                 .map(|p| lattice.is_point(p).then(|| lattice.weights(p)))
                 .collect(),
         }
+    }
+
+    /// The same samples, with the skin term.
+    fn with_skin(self, skin: Option<&'s Skin>) -> Self {
+        ElementSamples { skin, ..self }
     }
 
     /// The samples of the element with corner nodes `corners` into `values`.
