@@ -471,8 +471,8 @@ impl Checker<'_, '_, '_> {
             return Some((cell, None, value.span()));
         }
         let example = "{ blend = [\"a\", \"b\"], by = \"z / 20\" }";
-        let Some(table) = (match value.get_ref() {
-            DeValue::Table(t) => Some(t),
+        let table = match value.get_ref() {
+            DeValue::Table(t) => t,
             _ => {
                 let help = format!("write `cell = \"NAME\"`, or `cell = {example}`");
                 self.wrong_type(
@@ -481,10 +481,8 @@ impl Checker<'_, '_, '_> {
                     "a cell name or a transition table",
                     Some(&help),
                 );
-                None
+                return None;
             }
-        }) else {
-            return None;
         };
         let fields = self.fields(table, &TRANSITION_KEYS, &format!("in `{key}`"));
         let within = format!("in `{key}`");
@@ -620,8 +618,14 @@ impl Checker<'_, '_, '_> {
                     element.name()
                 ),
                 Some(&format!(
-                    "use a cell with `symmetry = \"{needed}\"`, or a scaffold of the elements \
-                     `{group}` tiles"
+                    "use a cell with `symmetry = \"{needed}\"`, or a scaffold of {} elements for \
+                     `{group}`",
+                    match group.as_str() {
+                        "Oh" => "hex",
+                        "Td" => "tet",
+                        "D4" => "quad",
+                        _ => "tri",
+                    }
                 )),
             );
         }
