@@ -121,8 +121,12 @@ impl Report {
                 if m { "manifold" } else { "NOT manifold" }
             ),
         };
+        let tiled = match &self.tiling {
+            Some(t) => format!(" in {} {} elements", t.elements, t.element),
+            None => String::new(),
+        };
         format!(
-            "{}: {} triangles, {} vertices, {validity}, volume fraction {:.4} -> {} ({:.2} s, {cached} of {} stages cached)",
+            "{}: {} triangles, {} vertices{tiled}, {validity}, volume fraction {:.4} -> {} ({:.2} s, {cached} of {} stages cached)",
             self.name,
             self.triangles,
             self.vertices,
