@@ -476,6 +476,16 @@ impl<'a> Builder<'a> {
                 let progress = self.progress.start(&node.name, stage.steps());
                 Ok(Value::Mesh(Arc::new(stage.run(&slices, &*progress)?)))
             }
+            Stage::Tile(stage) => {
+                let inputs = (0..node.inputs.len())
+                    .map(bytes)
+                    .collect::<Result<Vec<_>, _>>()?;
+                let slices: Vec<&[u8]> = inputs.iter().map(|b| b.as_slice()).collect();
+                let (cells, file) = slices.split_at(stage.cell_inputs().min(slices.len()));
+                let progress = self.progress.start(&node.name, 0);
+                let mesh = stage.run(cells, file.first().copied(), &*progress)?;
+                Ok(Value::Mesh(Arc::new(mesh)))
+            }
             Stage::Write(stage) => {
                 let Value::Mesh(mesh) = input(0) else {
                     return Err("input is not a mesh".into());
@@ -533,7 +543,7 @@ fn decode(stage: &Stage, payload: Vec<u8>) -> Result<Value, String> {
         | Stage::Fit(_)
         | Stage::Combine(_)
         | Stage::Constrain(_) => Ok(Value::Bytes(Arc::new(payload))),
-        Stage::Contour(_) | Stage::Sdf(_) => {
+        Stage::Contour(_) | Stage::Sdf(_) | Stage::Tile(_) => {
             Ok(Value::Mesh(Arc::new(MeshArtifact::decode(&payload)?)))
         }
         Stage::Write(_) => serde_json::from_slice(&payload)

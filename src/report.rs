@@ -5,6 +5,7 @@ use serde::Serialize;
 
 use crate::build::OutputResult;
 use crate::manifest::Manifest;
+use crate::stages::TilingSummary;
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Bbox {
@@ -36,6 +37,10 @@ pub struct Report {
     /// For an SDF output, the box it was contoured over (its bounds, when not given).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sdf_box: Option<Bbox>,
+    /// For a tiled output: the scaffold's element kind, counts and volume (the volume
+    /// fraction is over the scaffold's volume).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tiling: Option<TilingSummary>,
     pub bbox: Bbox,
     pub files: Vec<String>,
     pub stages: Vec<StageReport>,
@@ -50,9 +55,12 @@ impl Report {
             (None, Some(output)) => Some((output.domain_min, output.domain_max)),
             (None, None) => None,
         };
-        let domain_volume: f64 = domain.map_or(f64::NAN, |(min, max)| {
-            (0..3).map(|a| max[a] - min[a]).product()
-        });
+        let domain_volume: f64 = match &result.written.tiling {
+            Some(tiling) => tiling.scaffold_volume,
+            None => domain.map_or(f64::NAN, |(min, max)| {
+                (0..3).map(|a| max[a] - min[a]).product()
+            }),
+        };
         Report {
             name: result.name.clone(),
             triangles: s.triangles,
@@ -69,6 +77,7 @@ impl Report {
             },
             planar: result.written.planar_element_area.is_some(),
             sdf_box: result.written.domain.map(|[min, max]| Bbox { min, max }),
+            tiling: result.written.tiling.clone(),
             bbox: Bbox {
                 min: s.bbox_min,
                 max: s.bbox_max,
@@ -112,8 +121,12 @@ impl Report {
                 if m { "manifold" } else { "NOT manifold" }
             ),
         };
+        let tiled = match &self.tiling {
+            Some(t) => format!(" in {} {} elements", t.elements, t.element),
+            None => String::new(),
+        };
         format!(
-            "{}: {} triangles, {} vertices, {validity}, volume fraction {:.4} -> {} ({:.2} s, {cached} of {} stages cached)",
+            "{}: {} triangles, {} vertices{tiled}, {validity}, volume fraction {:.4} -> {} ({:.2} s, {cached} of {} stages cached)",
             self.name,
             self.triangles,
             self.vertices,

@@ -18,8 +18,8 @@ fn every_example_builds_watertight_manifold_outputs() {
         let scratch = tempfile::tempdir().expect("tempdir");
         let manifest = scratch.path().join(path.file_name().expect("name"));
         std::fs::copy(&path, &manifest).expect("copy");
-        // The meshes and crystals examples read, at the same relative place.
-        for dir in ["meshes", "crystals"] {
+        // The meshes, crystals and scaffolds examples read, at the same relative place.
+        for dir in ["meshes", "crystals", "scaffolds"] {
             common::copy_dir(&examples.join(dir), &scratch.path().join(dir), &[]);
         }
         let out = Command::new(common::BIN)

@@ -91,6 +91,22 @@ fn summarize(report: &serde_json::Value) -> String {
         num(&report["volume_fraction"]),
         vec3(&report["bbox"]["min"]),
         vec3(&report["bbox"]["max"]),
+    ) + &tiling(report)
+}
+
+/// The tiling line of a tiled output's report (nothing for other outputs).
+fn tiling(report: &serde_json::Value) -> String {
+    let t = &report["tiling"];
+    if t.is_null() {
+        return String::new();
+    }
+    format!(
+        "  tiling {} elements {} interior_faces {} boundary_faces {} scaffold_volume {:.6e}\n",
+        t["element"].as_str().expect("element"),
+        t["elements"],
+        t["interior_faces"],
+        t["boundary_faces"],
+        t["scaffold_volume"].as_f64().expect("volume"),
     )
 }
 

@@ -10,12 +10,13 @@ pub mod status;
 
 use std::collections::BTreeMap;
 
-use crate::manifest::{CellSource, FitResolution, Manifest, MeshFile};
+use crate::manifest::{CellSource, FitResolution, Manifest, MeshFile, ScaffoldSource};
 use crate::stages::Stage;
 use crate::stages::crystal::CrystalStage;
 use crate::stages::mesh::{FileStage, MeshCellStage};
 use crate::stages::sdf::SdfStage;
 use crate::stages::symmetric::{Combination, CombineStage, ConstrainStage, FitStage, SampleStage};
+use crate::stages::tile::TileStage;
 use crate::stages::write::WriteStage;
 
 /// Index of a node in [`Graph::nodes`].
@@ -214,6 +215,26 @@ impl Graph {
                 stem: output.stem.clone(),
             };
             let write = graph.push(format!("write:{name}"), Stage::Write(write), vec![solid]);
+            graph.outputs.insert(name.clone(), write);
+        }
+        // A tiled output: `tile` reading its cells' `constrain` nodes (and the scaffold's
+        // `file:` node), then `write`.
+        for (name, output) in &manifest.tiled_outputs {
+            let mut inputs = vec![compiler.node(&mut graph, &output.cell)?];
+            if let Some(t) = &output.transition {
+                inputs.push(compiler.node(&mut graph, &t.to)?);
+            }
+            if let ScaffoldSource::Mesh(file) = &manifest.scaffolds[&output.scaffold].source {
+                inputs.push(compiler.file(&mut graph, file));
+            }
+            let stage = Stage::Tile(TileStage::new(manifest, output));
+            let tiled = graph.push(format!("tile:{name}"), stage, inputs);
+            let write = WriteStage {
+                formats: output.formats.clone(),
+                encoding: output.encoding,
+                stem: output.stem.clone(),
+            };
+            let write = graph.push(format!("write:{name}"), Stage::Write(write), vec![tiled]);
             graph.outputs.insert(name.clone(), write);
         }
         graph.check_order()?;

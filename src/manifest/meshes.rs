@@ -186,7 +186,7 @@ impl Checker<'_, '_, '_> {
     }
 
     /// One of `options`, with a suggestion for a near miss. `what` names the kind of value.
-    fn choice(
+    pub(super) fn choice(
         &mut self,
         key: &str,
         value: &Value<'_>,

@@ -79,7 +79,18 @@ fn check_input_files(
             o.files
                 .iter()
                 .map(move |f| (format!("outputs.{name}.sdf"), f, "mesh"))
-        }));
+        }))
+        .chain(
+            manifest
+                .scaffolds
+                .iter()
+                .filter_map(|(name, s)| match &s.source {
+                    ScaffoldSource::Mesh(f) => {
+                        Some((format!("scaffolds.{name}.mesh"), f, "scaffold"))
+                    }
+                    ScaffoldSource::Grid(_) => None,
+                }),
+        );
     for (key, file, kind) in named {
         let problem = match std::fs::metadata(&file.path) {
             Ok(meta) if meta.is_file() => continue,

@@ -7,6 +7,7 @@ use std::path::PathBuf;
 
 use latticebuild_geom::field::Solid;
 use latticebuild_geom::mesh_io::{Encoding, Format};
+use latticebuild_geom::scaffold::ElementKind;
 use latticebuild_geom::sdf::Program;
 
 /// A validated manifest.
@@ -23,6 +24,11 @@ pub struct Manifest {
     /// Outputs whose solid is an SDF program (`sdf = "…"`); their names differ from those of
     /// `outputs` (one `[outputs]` table holds both).
     pub sdf_outputs: BTreeMap<String, SdfOutput>,
+    /// `[scaffolds.NAME]`: meshes (or generated grids) that cells are tiled into.
+    pub scaffolds: BTreeMap<String, Scaffold>,
+    /// Outputs tiling a cell into a scaffold (`scaffold = "…"`); their names differ from those
+    /// of `outputs` and `sdf_outputs`.
+    pub tiled_outputs: BTreeMap<String, TiledOutput>,
     /// Every external file the manifest references (not the manifest itself), for `watch`.
     pub inputs: Vec<PathBuf>,
 }
@@ -242,4 +248,88 @@ pub fn voxel_samples(min: [f64; 3], max: [f64; 3], voxel: f64) -> Result<[usize;
         counts[axis] = (intervals as usize).max(1) + 1;
     }
     Ok(counts)
+}
+
+/// A scaffold: the mesh whose elements a cell is tiled into.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scaffold {
+    pub name: Name,
+    pub source: ScaffoldSource,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum ScaffoldSource {
+    /// A mesh file (`mesh = "…"`: Gmsh, VTK, Abaqus, OBJ/OFF); its element kind is known only
+    /// once it is read.
+    Mesh(MeshFile),
+    /// A generated box (`grid = { … }`).
+    Grid(ScaffoldGrid),
+}
+
+/// `grid = { min, max, divisions, element }`. Validation guarantees `min < max` and at least
+/// one division on every axis the element uses (z is ignored by quad and tri grids), and at
+/// most [`MAX_GRID_ELEMENTS`] elements.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScaffoldGrid {
+    pub min: [f64; 3],
+    pub max: [f64; 3],
+    pub divisions: [usize; 3],
+    /// `Hex8`, `Tet4`, `Quad4` or `Tri3`.
+    pub element: ElementKind,
+}
+
+/// The group a cell tiled into elements of `kind` must have: Oh for hexahedra, Td for
+/// tetrahedra, D4 for quadrilaterals, D3 for triangles (their reference elements' groups).
+pub fn tiling_group(kind: ElementKind) -> &'static str {
+    match kind {
+        ElementKind::Hex8 | ElementKind::Hex20 | ElementKind::Hex27 => "Oh",
+        ElementKind::Tet4 | ElementKind::Tet10 => "Td",
+        ElementKind::Quad4 | ElementKind::Quad8 | ElementKind::Quad9 => "D4",
+        ElementKind::Tri3 | ElementKind::Tri6 => "D3",
+    }
+}
+
+/// Most elements of a generated grid.
+pub const MAX_GRID_ELEMENTS: usize = 10_000_000;
+
+/// An output tiling a symmetric cell (or a transition between two) into every element of a
+/// scaffold. Validation guarantees the scaffold and cells exist, the cells have named groups
+/// (one group, for a transition), the group matches a grid's element, `2 ≤ resolution ≤ 256`
+/// and `skin > 0`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TiledOutput {
+    pub name: Name,
+    /// A key of [`Manifest::scaffolds`].
+    pub scaffold: String,
+    /// The cell (a key of [`Manifest::cells`]); with a transition, the cell at weight 0.
+    pub cell: String,
+    pub transition: Option<TiledTransition>,
+    /// The solid; a graded `thickness` or `offset` replaces its own value node by node.
+    pub solid: Solid,
+    pub thickness: Option<NodalValue>,
+    pub offset: Option<NodalValue>,
+    /// Samples per element edge.
+    pub resolution: usize,
+    /// A closed skin of this thickness (model units) along the scaffold's boundary.
+    pub skin: Option<f64>,
+    pub formats: Vec<Format>,
+    pub encoding: Encoding,
+    pub stem: String,
+}
+
+/// `cell = { blend = [a, b], by = … }`: `Φ = (1 − w) Φ_a + w Φ_b`, with `w` clamped to [0, 1].
+#[derive(Clone, Debug, PartialEq)]
+pub struct TiledTransition {
+    /// The cell at weight 1.
+    pub to: String,
+    pub by: NodalValue,
+}
+
+/// A value given at the scaffold's nodes.
+#[derive(Clone, Debug, PartialEq)]
+pub enum NodalValue {
+    /// An expression in the model coordinates x, y, z (checked by the expression parser).
+    Expr(String),
+    /// `"nodedata:NAME"`: a `$NodeData` view (VTK point data) of the scaffold file.
+    NodeData(String),
 }

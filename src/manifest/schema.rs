@@ -30,6 +30,8 @@ use crate::diagnostics::Diagnostic;
 mod crystals;
 #[path = "meshes.rs"]
 mod meshes;
+#[path = "scaffolds.rs"]
+mod scaffolds;
 #[path = "sdf.rs"]
 mod sdf;
 #[path = "symmetry.rs"]
@@ -38,7 +40,7 @@ mod symmetry;
 type Key<'i> = Spanned<DeString<'i>>;
 type Value<'i> = Spanned<DeValue<'i>>;
 
-const TOP_KEYS: [&str; 3] = ["build", "cells", "outputs"];
+const TOP_KEYS: [&str; 4] = ["build", "cells", "scaffolds", "outputs"];
 const BUILD_KEYS: [&str; 1] = ["out_dir"];
 const CELL_KEYS: [&str; 18] = [
     "tpms",
@@ -106,8 +108,11 @@ pub(crate) fn expects_string(path: &[&str]) -> bool {
             | [
                 "outputs",
                 _,
-                "cell" | "sdf" | "over" | "solid" | "path" | "within"
+                "cell" | "sdf" | "over" | "solid" | "path" | "within" | "scaffold"
             ]
+            | ["outputs", _, "cell", "by"]
+            | ["scaffolds", _, "mesh"]
+            | ["scaffolds", _, "grid", "element"]
     )
 }
 
@@ -140,12 +145,20 @@ pub(crate) fn validate(
     };
     let mut out_dir = Some("out".to_string());
     let mut cells_table = None;
+    let mut scaffolds_table = None;
     let mut outputs_table = None;
     for (key, value) in root {
         match key.get_ref().as_ref() {
             "build" => out_dir = checker.build(value),
             "cells" => {
                 cells_table = checker.table("cells", value, "define cells as `[cells.NAME]` tables")
+            }
+            "scaffolds" => {
+                scaffolds_table = checker.table(
+                    "scaffolds",
+                    value,
+                    "define scaffolds as `[scaffolds.NAME]` tables",
+                )
             }
             "outputs" => {
                 outputs_table = checker.table(
@@ -174,10 +187,32 @@ pub(crate) fn validate(
         drafts.extend(checker.cell(key, value, &cell_names));
     }
     let cells = checker.resolve(drafts);
+    let scaffold_names: BTreeSet<&str> = scaffolds_table
+        .iter()
+        .flat_map(|t| t.keys())
+        .map(|k| k.get_ref().as_ref())
+        .collect();
+    let mut scaffolds = BTreeMap::new();
+    for (key, value) in scaffolds_table.into_iter().flatten() {
+        if let Some(scaffold) = checker.scaffold(key, value) {
+            scaffolds.insert(scaffold.name.text.clone(), scaffold);
+        }
+    }
+    let tiling = scaffolds::TilingContext {
+        scaffold_names: &scaffold_names,
+        scaffolds: &scaffolds,
+        cell_names: &cell_names,
+        cells: &cells,
+    };
     let mut outputs = BTreeMap::new();
     let mut sdf_outputs = BTreeMap::new();
+    let mut tiled_outputs = BTreeMap::new();
     for (key, value) in outputs_table.into_iter().flatten() {
-        if sdf::is_sdf_output(value) {
+        if scaffolds::is_tiled_output(value) && !sdf::is_sdf_output(value) {
+            if let Some(output) = checker.tiled_output(key, value, &tiling) {
+                tiled_outputs.insert(output.name.text.clone(), output);
+            }
+        } else if sdf::is_sdf_output(value) {
             if let Some(output) = checker.sdf_output(key, value) {
                 sdf_outputs.insert(output.name.text.clone(), output);
             }
@@ -194,14 +229,20 @@ pub(crate) fn validate(
         Some(parent) if !parent.as_os_str().is_empty() => parent.join(out_dir?),
         _ => PathBuf::from(out_dir?),
     };
+    let mut inputs = sdf::with_program_files(meshes::input_files(&cells, &outputs), &sdf_outputs);
+    inputs.extend(scaffolds::scaffold_files(&scaffolds));
+    inputs.sort();
+    inputs.dedup();
     Some(Manifest {
         path: manifest_path.to_path_buf(),
         out_dir,
         root: dir,
-        inputs: sdf::with_program_files(meshes::input_files(&cells, &outputs), &sdf_outputs),
+        inputs,
         cells,
         outputs,
         sdf_outputs,
+        scaffolds,
+        tiled_outputs,
     })
 }
 

@@ -125,7 +125,7 @@ error: unknown top-level key `version`
 1 | version = 1
   | ^^^^^^^ unknown key
   |
-  = help: expected one of `build`, `cells`, `outputs`
+  = help: expected one of `build`, `cells`, `scaffolds`, `outputs`
 
 error: could not load `lattice.toml` due to 1 previous error
 ",
@@ -945,6 +945,8 @@ fn defaults_are_filled_in() {
         )]),
         outputs: BTreeMap::from([("g".to_string(), output("g", Some(41..42)))]),
         sdf_outputs: BTreeMap::new(),
+        scaffolds: BTreeMap::new(),
+        tiled_outputs: BTreeMap::new(),
         inputs: Vec::new(),
     };
     assert_eq!(manifest, expected);
@@ -1355,3 +1357,6 @@ mod crystal_cells {
         assert_eq!(errors.len(), expect.len(), "{all}");
     }
 }
+
+#[path = "scaffolds_tests.rs"]
+mod scaffolds_tests;

@@ -66,6 +66,21 @@ pub struct MeshArtifact {
     /// The box `[min, max]` an SDF program was contoured over, found when it ran (its bounds
     /// are computed then); `None` for cells, whose domain is the manifest's.
     pub domain: Option<[[f64; 3]; 2]>,
+    /// What a tiling found (`None` but for tiled outputs).
+    pub tiling: Option<TilingSummary>,
+}
+
+/// What the `tile` stage reports besides the mesh: the scaffold's elements and faces, and its
+/// volume (the reference of the volume fraction).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TilingSummary {
+    /// The element kind (`tet4`, `hex27`, …).
+    pub element: String,
+    pub elements: u64,
+    pub interior_faces: u64,
+    pub boundary_faces: u64,
+    /// From the elements' isoparametric maps (curved for quadratic elements).
+    pub scaffold_volume: f64,
 }
 
 /// What the SVG of a 2D cell needs: the region's boundary loops and the element's outline.
@@ -84,6 +99,8 @@ struct MeshHead {
     // Absent for cells, so their payloads (and hashes) are what they were before SDF outputs.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     domain: Option<[[f64; 3]; 2]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    tiling: Option<TilingSummary>,
 }
 
 impl MeshArtifact {
@@ -94,6 +111,7 @@ impl MeshArtifact {
             summary: self.summary.clone(),
             planar: self.planar.clone(),
             domain: self.domain,
+            tiling: self.tiling.clone(),
         };
         let summary = serde_json::to_vec(&head).expect("summary serializes");
         let mut head = Vec::with_capacity(32 + summary.len());
@@ -143,6 +161,7 @@ impl MeshArtifact {
             summary,
             planar,
             domain,
+            tiling,
         } = serde_json::from_slice(&payload[32..summary_end]).map_err(|e| bad(&e.to_string()))?;
         let vertices = bytemuck::pod_collect_to_vec(&payload[summary_end..vertices_end]);
         let triangles = bytemuck::pod_collect_to_vec(&payload[vertices_end..end]);
@@ -154,6 +173,7 @@ impl MeshArtifact {
             summary,
             planar,
             domain,
+            tiling,
         })
     }
 }
@@ -180,4 +200,7 @@ pub struct WrittenOutput {
     /// For an SDF program, the box it was contoured over (see [`MeshArtifact::domain`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub domain: Option<[[f64; 3]; 2]>,
+    /// For a tiled output, what the tiling found (see [`MeshArtifact::tiling`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tiling: Option<TilingSummary>,
 }

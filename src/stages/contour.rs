@@ -153,6 +153,7 @@ impl ContourStage {
             summary,
             planar,
             domain: None,
+            tiling: None,
         })
     }
 

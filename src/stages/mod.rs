@@ -19,6 +19,7 @@
 //! | `blend`   | group, weights                                          | member coefficient tables | coefficient table |
 //! | `minkowski` | group, op, N                                          | two coefficient tables | coefficient table |
 //! | `constrain` | group, normal_to_faces, offset, invert                | coefficient table | coefficient table + constraint report |
+//! | `tile`    | scaffold (extension, or grid), group, by, solid, offset, thickness, graded thickness/offset, resolution, skin | cell table(s) (+ scaffold file bytes) | mesh + its check + the tiling's counts and scaffold volume |
 //! | `sdf`     | canonical program (paths as input numbers), bounds, samples or voxel | the `file` words' bytes | mesh + its check + the box |
 //! | `write`   | formats, encoding, path stem                            | contour payload| files written and the mesh summary (JSON) |
 
@@ -29,12 +30,13 @@ pub mod crystal;
 pub mod mesh;
 pub mod sdf;
 pub mod symmetric;
+pub mod tile;
 pub mod write;
 
 use crate::cache::{ContentHash, Key, KeyBuilder, KeyDescription, KeyError};
 use crate::manifest::{Cell, Output};
 
-pub use artifact::{MeshArtifact, MeshSummary, WrittenFile, WrittenOutput};
+pub use artifact::{MeshArtifact, MeshSummary, TilingSummary, WrittenFile, WrittenOutput};
 pub use write::OutputSink;
 
 /// One node's computation, with its parameters.
@@ -50,6 +52,7 @@ pub enum Stage {
     Constrain(symmetric::ConstrainStage),
     Contour(contour::ContourStage),
     Sdf(sdf::SdfStage),
+    Tile(tile::TileStage),
     Write(write::WriteStage),
 }
 
@@ -79,6 +82,7 @@ impl Stage {
             Stage::Constrain(_) => "constrain",
             Stage::Contour(_) => "contour",
             Stage::Sdf(_) => "sdf",
+            Stage::Tile(_) => "tile",
             Stage::Write(_) => "write",
         }
     }
@@ -94,6 +98,7 @@ impl Stage {
             }
             Stage::Contour(_) => contour::VERSION,
             Stage::Sdf(_) => sdf::VERSION,
+            Stage::Tile(_) => tile::VERSION,
             Stage::Write(_) => write::VERSION,
         }
     }
@@ -112,6 +117,7 @@ impl Stage {
             Stage::Constrain(s) => s.key_params(builder),
             Stage::Contour(s) => s.key_params(builder),
             Stage::Sdf(s) => s.key_params(builder),
+            Stage::Tile(s) => s.key_params(builder),
             Stage::Write(s) => s.key_params(builder),
         };
         let builder = inputs
@@ -135,6 +141,8 @@ impl Stage {
             Stage::Contour(_) if i == 0 => "cell".into(),
             Stage::Contour(_) => "part".into(),
             Stage::Sdf(s) => format!("file {}", s.files.get(i).map_or("?", |f| f.as_str())),
+            Stage::Tile(s) if i < s.cell_inputs() => format!("cell {}", i + 1),
+            Stage::Tile(_) => "scaffold".into(),
             Stage::Write(_) => "mesh".into(),
         }
     }

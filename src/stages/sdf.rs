@@ -183,6 +183,7 @@ impl SdfStage {
             mesh: contoured.mesh,
             planar: None,
             domain: Some([contoured.domain.min, contoured.domain.max]),
+            tiling: None,
         })
     }
 }

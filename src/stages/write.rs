@@ -110,6 +110,7 @@ impl WriteStage {
             summary: artifact.summary.clone(),
             planar_element_area: artifact.planar.as_ref().map(|p| p.element_area),
             domain: artifact.domain,
+            tiling: artifact.tiling.clone(),
         })
     }
 }

@@ -32,6 +32,7 @@ mod lattice;
 mod local;
 mod scaffold;
 mod simplex;
+mod skin;
 mod weld;
 
 use rayon::prelude::*;
@@ -44,6 +45,7 @@ use weld::{Locals, weld};
 
 pub use cube::HEX_CORNERS;
 pub use scaffold::{reference_element, tile_scaffold};
+pub use skin::{Skin, tile_scaffold_with_skin};
 
 /// The isoparametric maps of a scaffold's elements.
 pub trait ElementMap: Sync {
@@ -107,6 +109,8 @@ pub enum TileError {
     NotVolume(&'static str),
     #[error("the mesh would have {0} vertices, more than 32-bit indices can address")]
     TooManyVertices(u64),
+    #[error("skin: {0}")]
+    Skin(String),
 }
 
 /// What is tiled into every element: a cell (or a transition between two), in reference
@@ -168,6 +172,16 @@ pub fn tile(
     solid: &TiledSolid,
     resolution: usize,
 ) -> Result<(Mesh, TileStats), TileError> {
+    tile_with(elements, solid, None, resolution)
+}
+
+/// [`tile`], with a skin along the scaffold's boundary when given (`skin.rs`).
+fn tile_with(
+    elements: &Elements,
+    solid: &TiledSolid,
+    skin: Option<&Skin>,
+    resolution: usize,
+) -> Result<(Mesh, TileStats), TileError> {
     if resolution < 2 {
         return Err(TileError::Resolution(resolution));
     }
@@ -202,12 +216,12 @@ pub fn tile(
     };
     let lattice = lattice.as_ref();
     let cell = symmetric_samples(lattice, solid.cell);
-    if solid.is_uniform() {
+    if solid.is_uniform() && skin.is_none() {
         let values: Vec<f64> = cell.iter().map(|&v| solid.solid.apply(v)).collect();
         let local = lattice.contour(&values);
         return weld(elements, lattice, Locals::Uniform(&local));
     }
-    let samples = ElementSamples::new(lattice, solid, cell);
+    let samples = ElementSamples::new(lattice, solid, cell).with_skin(skin);
     let locals: Vec<local::LocalMesh> = (0..elements.count())
         .into_par_iter()
         .map_init(
@@ -225,6 +239,7 @@ pub fn tile(
 /// samples of its cells and the nodal values at the element's corners.
 struct ElementSamples<'s> {
     solid: &'s TiledSolid<'s>,
+    skin: Option<&'s Skin>,
     cell: Vec<f64>,
     to: Option<Vec<f64>>,
     /// Per lattice index: the point's corner weights (None off the lattice).
@@ -235,6 +250,7 @@ impl<'s> ElementSamples<'s> {
     fn new(lattice: &dyn Lattice, solid: &'s TiledSolid<'s>, cell: Vec<f64>) -> Self {
         ElementSamples {
             solid,
+            skin: None,
             cell,
             to: solid
                 .transition
@@ -246,9 +262,15 @@ impl<'s> ElementSamples<'s> {
         }
     }
 
+    /// The same samples, with the skin term.
+    fn with_skin(self, skin: Option<&'s Skin>) -> Self {
+        ElementSamples { skin, ..self }
+    }
+
     /// The samples of the element with corner nodes `corners` into `values`.
     fn fill(&self, corners: &[u32], values: &mut [f64]) {
         let solid = self.solid;
+        let skin = self.skin.filter(|s| !s.is_far(corners));
         for (p, w) in self.weights.iter().enumerate() {
             let Some(w) = w else { continue };
             let at = |nodal: &[f64]| interpolate(corners, w, nodal);
@@ -259,6 +281,9 @@ impl<'s> ElementSamples<'s> {
             }
             let graded = graded_solid(solid.solid, solid.thickness.map(at), solid.offset.map(at));
             values[p] = graded.apply(phi);
+            if let Some(skin) = skin {
+                values[p] = skin.apply(values[p], corners, w);
+            }
         }
     }
 }

@@ -30,6 +30,17 @@ pub fn tile_scaffold(
     solid: &TiledSolid,
     resolution: usize,
 ) -> Result<(Mesh, TileStats), TileError> {
+    let (shape, corners) = corners(scaffold)?;
+    let elements = Elements {
+        shape,
+        corners: &corners,
+        map: scaffold,
+    };
+    tile(&elements, solid, resolution)
+}
+
+/// The reference shape of a volume scaffold and its elements' corner nodes, element by element.
+pub(super) fn corners(scaffold: &Scaffold) -> Result<(Element3, Vec<u32>), TileError> {
     let shape =
         reference_element(scaffold.kind).ok_or(TileError::NotVolume(scaffold.kind.name()))?;
     let (per, corners_per) = (scaffold.kind.node_count(), scaffold.kind.corner_count());
@@ -38,10 +49,5 @@ pub fn tile_scaffold(
         .chunks_exact(per)
         .flat_map(|element| element[..corners_per].iter().copied())
         .collect();
-    let elements = Elements {
-        shape,
-        corners: &corners,
-        map: scaffold,
-    };
-    tile(&elements, solid, resolution)
+    Ok((shape, corners))
 }
