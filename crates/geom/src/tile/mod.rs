@@ -30,8 +30,11 @@
 mod cube;
 mod lattice;
 mod local;
+mod planar;
 mod scaffold;
 mod simplex;
+mod square;
+mod triangle;
 mod weld;
 
 use rayon::prelude::*;
@@ -40,9 +43,13 @@ use crate::element::Element3;
 use crate::field::{ScalarField, Solid};
 use crate::mesh::Mesh;
 use lattice::{Lattice, Weights};
-use weld::{Locals, weld};
+use weld::{Corners, Locals, weld};
 
 pub use cube::HEX_CORNERS;
+pub use planar::{
+    Elements2, RegionError, TiledRegion, TiledShell, extrude, region_svg, surface_element,
+    thickness_normal, tile_planar, tile_surface_scaffold,
+};
 pub use scaffold::{reference_element, tile_scaffold};
 
 /// The isoparametric maps of a scaffold's elements.
@@ -103,7 +110,7 @@ pub enum TileError {
         given: usize,
         nodes: usize,
     },
-    #[error("{0} scaffolds are surfaces; only volume scaffolds (tet, hex) are tiled so far")]
+    #[error("{0} scaffolds are surfaces: tile them with tile_surface_scaffold")]
     NotVolume(&'static str),
     #[error("the mesh would have {0} vertices, more than 32-bit indices can address")]
     TooManyVertices(u64),
@@ -168,25 +175,35 @@ pub fn tile(
     solid: &TiledSolid,
     resolution: usize,
 ) -> Result<(Mesh, TileStats), TileError> {
+    check_input(elements.corners, elements.corner_count(), solid, resolution)?;
+    let lattice: Box<dyn Lattice> = match elements.shape {
+        Element3::Cube => Box::new(cube::CubeLattice::new(resolution)),
+        Element3::Tetrahedron => Box::new(simplex::TetLattice::new(resolution)),
+    };
+    tile_on(elements, lattice.as_ref(), solid)
+}
+
+/// The checks every tiling makes before it starts: the resolution, the corner list's length,
+/// and nodal arrays long enough for every node the corners name.
+fn check_input(
+    corners: &[u32],
+    per_element: usize,
+    solid: &TiledSolid,
+    resolution: usize,
+) -> Result<(), TileError> {
     if resolution < 2 {
         return Err(TileError::Resolution(resolution));
     }
     if resolution > 256 {
         return Err(TileError::ResolutionTooHigh(resolution));
     }
-    let per_element = elements.corner_count();
-    if !elements.corners.len().is_multiple_of(per_element) {
+    if !corners.len().is_multiple_of(per_element) {
         return Err(TileError::Corners {
-            len: elements.corners.len(),
+            len: corners.len(),
             per_element,
         });
     }
-    let nodes = elements
-        .corners
-        .iter()
-        .map(|&c| c as usize + 1)
-        .max()
-        .unwrap_or(0);
+    let nodes = corners.iter().map(|&c| c as usize + 1).max().unwrap_or(0);
     for (what, values) in solid.nodal() {
         if values.len() < nodes {
             return Err(TileError::NodalValues {
@@ -196,11 +213,16 @@ pub fn tile(
             });
         }
     }
-    let lattice: Box<dyn Lattice> = match elements.shape {
-        Element3::Cube => Box::new(cube::CubeLattice::new(resolution)),
-        Element3::Tetrahedron => Box::new(simplex::TetLattice::new(resolution)),
-    };
-    let lattice = lattice.as_ref();
+    Ok(())
+}
+
+/// Samples, contours and welds `solid` over `elements` on `lattice` (steps 1–4 of the module
+/// docs), whatever the element's dimension.
+fn tile_on(
+    elements: &dyn Corners,
+    lattice: &dyn Lattice,
+    solid: &TiledSolid,
+) -> Result<(Mesh, TileStats), TileError> {
     let cell = symmetric_samples(lattice, solid.cell);
     if solid.is_uniform() {
         let values: Vec<f64> = cell.iter().map(|&v| solid.solid.apply(v)).collect();
