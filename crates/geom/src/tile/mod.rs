@@ -22,6 +22,9 @@
 //!    depend on the thread count.
 //! 4. **Caps** are kept on scaffold boundary faces (faces used by one element) only.
 //!
+//! 2D scaffolds (tri, quad) are tiled by the same steps into a planar or surface region, see
+//! `planar.rs` ([`tile_surface_scaffold`]); choose by `ElementKind::dimension()`.
+//!
 //! Invariants: the output is closed, manifold and outward-oriented whenever every element
 //! map is orientation-preserving and the scaffold is conforming (each face used by one or two
 //! elements); vertex and triangle order depend only on the scaffold, the cell and the

@@ -568,3 +568,7 @@ fn dot(a: P3, b: P3) -> f64 {
 fn norm(a: P3) -> f64 {
     dot(a, a).sqrt()
 }
+
+#[cfg(test)]
+#[path = "planar_tests.rs"]
+mod tests;
