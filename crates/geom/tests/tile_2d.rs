@@ -539,3 +539,46 @@ fn svg_draws_the_region_and_every_element_edge() {
     let curved = tile(&read("cylinder_side_quad4.msh"), &SquareCell, 4);
     assert!(region_svg(&curved, &scaffold).is_err());
 }
+
+#[test]
+fn orientation_problems_are_errors_naming_elements() {
+    let solid = TiledSolid::of(&SquareCell, Solid::Inside { offset: 0.0 });
+    // One quad of the cylinder's side turned over: its edges run with its neighbours'.
+    let mut surface = read("cylinder_side_quad4.msh");
+    surface.connectivity[..4].reverse();
+    let err = tile_surface_scaffold(&surface, &solid, 4)
+        .map(|_| ())
+        .unwrap_err();
+    assert!(
+        matches!(err, RegionError::Inconsistent { a, b, .. } if a == surface.element_tags[0] || b == surface.element_tags[0]),
+        "{err}"
+    );
+    assert!(thickness_normal(&surface, &solid, 4, 0.1).is_err());
+    // The same in the plane: counter-clockwise and clockwise elements mixed.
+    let mut plate = read("plate_hole_quad4.msh");
+    plate.connectivity[4..8].reverse();
+    let err = tile_surface_scaffold(&plate, &solid, 4)
+        .map(|_| ())
+        .unwrap_err();
+    assert_eq!(
+        err,
+        RegionError::MixedOrientation {
+            ccw: plate.element_tags[0],
+            cw: plate.element_tags[1]
+        }
+    );
+    // All clockwise: flipped as a whole, so the region is the same, counter-clockwise.
+    let ccw = tile(&read("plate_hole_quad4.msh"), &SquareCell, 5);
+    let mut all_cw = read("plate_hole_quad4.msh");
+    for element in all_cw.connectivity.chunks_exact_mut(4) {
+        element.swap(1, 3);
+    }
+    let cw = tile(&all_cw, &SquareCell, 5);
+    assert!(
+        (cw.area - ccw.area).abs() < 1e-9 * ccw.area && cw.area > 0.0,
+        "{} {}",
+        cw.area,
+        ccw.area
+    );
+    boundary_edges(&cw, "clockwise plate");
+}

@@ -194,9 +194,13 @@ fn normal_at(scaffold: &Scaffold, e: usize, xi: [f64; 3]) -> [f64; 3] {
 fn planar_flip(scaffold: &Scaffold) -> Result<bool, RegionError> {
     let (mut ccw, mut cw) = (None, None);
     for e in 0..scaffold.element_count() {
+        // Degenerate elements (zero area) are `scaffold::check`'s to report.
         let z = normal_at(scaffold, e, [0.0; 3])[2];
-        let slot = if z > 0.0 { &mut ccw } else { &mut cw };
-        slot.get_or_insert(scaffold.element_tags[e]);
+        if z > 0.0 {
+            ccw.get_or_insert(scaffold.element_tags[e]);
+        } else if z < 0.0 {
+            cw.get_or_insert(scaffold.element_tags[e]);
+        }
     }
     match (ccw, cw) {
         (Some(ccw), Some(cw)) => Err(RegionError::MixedOrientation { ccw, cw }),
