@@ -36,7 +36,7 @@
 //!   parts of the surface, closer than `h`, is not detected.)
 //! - Everything is a pure function of the arguments: identical for any thread count.
 
-use std::collections::{HashMap, HashSet};
+use rayon::prelude::*;
 
 use super::lattice::Lattice;
 use super::square::SquareLattice;
@@ -289,24 +289,46 @@ fn region_of(mesh: Mesh, stats: TileStats, planar: bool) -> TiledRegion {
 
 /// Chains the edges used by one triangle into closed loops, directed as in their triangle.
 /// Loops start at the earliest boundary edge in triangle order; at a vertex with several
-/// outgoing boundary edges (where the region touches itself) the latest unused is taken, so
-/// the result is deterministic and every loop is closed.
+/// outgoing boundary edges (where the region touches itself) the earliest unused is taken, so
+/// the result is deterministic and every loop is closed. Edges are matched by sorting their
+/// undirected keys (no hashing: this runs over tens of millions of edges).
 fn boundary_loops(mesh: &Mesh) -> Vec<Vec<u32>> {
-    let directed: HashSet<(u32, u32)> = mesh
-        .triangles
-        .iter()
-        .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+    let directed = |slot: usize| {
+        let t = mesh.triangles[slot / 3];
+        (t[slot % 3], t[(slot % 3 + 1) % 3])
+    };
+    let mut keys: Vec<(u64, u32)> = (0..mesh.triangles.len() * 3)
+        .into_par_iter()
+        .map(|slot| {
+            let (a, b) = directed(slot);
+            (u64::from(a.min(b)) << 32 | u64::from(a.max(b)), slot as u32)
+        })
         .collect();
-    let edges: Vec<(u32, u32)> = mesh
-        .triangles
-        .iter()
-        .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
-        .filter(|&(a, b)| !directed.contains(&(b, a)))
-        .collect();
-    let mut outgoing: HashMap<u32, Vec<usize>> = HashMap::new();
-    for (e, &(a, _)) in edges.iter().enumerate().rev() {
-        outgoing.entry(a).or_default().push(e);
+    keys.par_sort_unstable();
+    // Keys used once are boundary edges (twice: interior, in opposite directions on an
+    // edge-manifold region); in triangle order.
+    let mut slots: Vec<u32> = Vec::new();
+    let mut i = 0;
+    while i < keys.len() {
+        let mut j = i + 1;
+        while j < keys.len() && keys[j].0 == keys[i].0 {
+            j += 1;
+        }
+        if j - i == 1 {
+            slots.push(keys[i].1);
+        }
+        i = j;
     }
+    drop(keys);
+    slots.sort_unstable();
+    let edges: Vec<(u32, u32)> = slots.iter().map(|&s| directed(s as usize)).collect();
+    // Outgoing edges of each vertex: a range of `starts`, in edge order.
+    let mut starts: Vec<(u32, u32)> = edges
+        .iter()
+        .enumerate()
+        .map(|(e, &(a, _))| (a, e as u32))
+        .collect();
+    starts.sort_unstable();
     let mut used = vec![false; edges.len()];
     let mut loops = Vec::new();
     for start in 0..edges.len() {
@@ -319,16 +341,12 @@ fn boundary_loops(mesh: &Mesh) -> Vec<Vec<u32>> {
             used[e] = true;
             let (a, b) = edges[e];
             points.push(a);
-            let next = outgoing.get_mut(&b).and_then(|list| {
-                while let Some(&candidate) = list.last() {
-                    if used[candidate] {
-                        list.pop();
-                    } else {
-                        return Some(candidate);
-                    }
-                }
-                None
-            });
+            let from = starts.partition_point(|&(v, _)| v < b);
+            let next = starts[from..]
+                .iter()
+                .take_while(|&&(v, _)| v == b)
+                .map(|&(_, e)| e as usize)
+                .find(|&e| !used[e]);
             match next {
                 Some(n) => e = n,
                 None => break,
