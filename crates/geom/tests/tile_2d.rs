@@ -332,6 +332,7 @@ fn structured_grids_match_a_quadrature_of_the_cell() {
         let fraction = region.area / 6.0;
         let expected = quadrature_fraction(phi, kind == ElementKind::Tri3);
         assert!(expected > 0.2 && expected < 0.8, "{kind}: {expected}");
+        eprintln!("{kind} grid: tiled fraction {fraction:.6}, quadrature {expected:.6}");
         assert!(
             (fraction - expected).abs() < 2e-3,
             "{kind}: tiled {fraction} vs quadrature {expected}"
@@ -360,6 +361,7 @@ fn extruded_regions_are_closed_with_volume_area_times_height() {
             let solid = extrude(&region, h).unwrap_or_else(|e| panic!("{e}"));
             let volume = closed(&solid, what);
             let expected = region.area * h;
+            eprintln!("extrude {what} h={h}: volume {volume:.9} vs area × h {expected:.9}");
             assert!(
                 ((volume - expected) / expected).abs() < 1e-9,
                 "{what}: volume {volume} vs area × h {expected}"
@@ -386,6 +388,7 @@ fn thickness_normal_makes_closed_shells_of_volume_area_times_h() {
             thickness_normal(&scaffold, &solid, 6, h).unwrap_or_else(|e| panic!("{file}: {e}"));
         let volume = closed(&shell.mesh, file);
         let expected = shell.mid.area * h;
+        eprintln!("thickness_normal {file} h={h}: volume {volume:.6} vs area × h {expected:.6}");
         assert!(
             ((volume - expected) / expected).abs() < 1e-2,
             "{file}: volume {volume} vs area × h {expected}"
@@ -440,6 +443,7 @@ fn quadratic_elements_follow_the_curved_surface() {
     let linear = tile(&read("sphere_surface_tri3.msh"), &TriangleCell, 7);
     let quadratic = tile(&read("sphere_surface_tri6.msh"), &TriangleCell, 7);
     let (dl, dq) = (sphere_deviation(&linear), sphere_deviation(&quadratic));
+    eprintln!("sphere surface: max |r − 10| tri3 {dl:.5}, tri6 {dq:.5}");
     // Flat triangles of side ≈ 1.3 sag up to ≈ h²/(8R) ≈ 0.03 below the sphere; the quadratic
     // map's own error is an order smaller.
     assert!(dl > 0.01, "tri3 deviation {dl}");
@@ -462,6 +466,7 @@ fn quadratic_elements_follow_the_curved_surface() {
             .fold(0.0, f64::max)
     };
     let (dl, dq) = (hole("plate_hole_quad4.msh"), hole("plate_hole_quad9.msh"));
+    eprintln!("plate hole: max |r − 5| quad4 {dl:.5}, quad9 {dq:.5}");
     assert!(dq < 0.2 * dl, "quad9 hole deviation {dq} vs quad4 {dl}");
 }
 
