@@ -502,7 +502,12 @@ fn graded_and_transition_regions_stay_edge_manifold() {
 #[test]
 fn thread_count_does_not_change_the_output() {
     let scaffold = read("cylinder_side_quad9.msh");
-    let solid = TiledSolid::of(&SquareCell, Solid::Inside { offset: 0.0 });
+    // Graded, so every element is contoured on its own (the per-element path).
+    let offset: Vec<f64> = scaffold.nodes.iter().map(|x| 0.02 * x[2]).collect();
+    let solid = TiledSolid {
+        offset: Some(&offset),
+        ..TiledSolid::of(&SquareCell, Solid::Inside { offset: 0.0 })
+    };
     let run = |threads| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
