@@ -159,6 +159,6 @@ fn surface_scaffolds_are_refused_with_their_kind() {
     let err = tile_scaffold(&scaffold, &solid, 4).map(|_| ()).unwrap_err();
     assert_eq!(
         err.to_string(),
-        "quad4 scaffolds are surfaces; only volume scaffolds (tet, hex) are tiled so far"
+        "quad4 scaffolds are surfaces: tile them with tile_surface_scaffold"
     );
 }

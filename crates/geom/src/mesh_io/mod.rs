@@ -26,7 +26,7 @@ use crate::mesh::Mesh;
 use rayon::prelude::*;
 use std::io::{self, Write};
 
-pub use svg::write_svg;
+pub use svg::{scaffold_svg, write_svg};
 
 /// Writes `mesh` to `out` in `format`. `encoding` chooses binary or text for STL, PLY and VTK
 /// and is ignored by OBJ and OFF, which are always text.

@@ -6,6 +6,9 @@
 //! (`M … L … Z` per loop) with `fill-rule="evenodd"`, so holes stay empty whatever their
 //! orientation; the outline is a thin unfilled `<polygon>` drawn on top.
 //!
+//! [`scaffold_svg`] draws a tiled planar region the same way, with the scaffold's element edges
+//! as one faint unfilled `<path>` on top instead of an outline.
+//!
 //! Invariants: the output is a pure function of the input (numbers are printed with a fixed
 //! number of decimals, trailing zeros trimmed and `-0` written `0`); nothing is written when a
 //! coordinate is not finite, which fails with `InvalidInput`.
@@ -23,29 +26,83 @@ pub fn write_svg(
     element_outline: &[[f64; 2]],
     out: &mut dyn Write,
 ) -> io::Result<()> {
-    let all_points = || {
-        element_outline
-            .iter()
-            .chain(region.boundary.iter().flatten())
-    };
-    if let Some(p) = all_points().find(|p| !(p[0].is_finite() && p[1].is_finite())) {
-        return Err(io::Error::new(
-            io::ErrorKind::InvalidInput,
-            format!("point {p:?} has a non-finite coordinate"),
-        ));
-    }
+    let all_points = element_outline
+        .iter()
+        .chain(region.boundary.iter().flatten());
+    check_finite(all_points)?;
     let framed: Vec<&[f64; 2]> = if element_outline.is_empty() {
         region.boundary.iter().flatten().collect()
     } else {
         element_outline.iter().collect()
     };
-    let (min, max) = bounds(&framed);
+    let (mut svg, stroke) = header(&framed);
+    region_path(&mut svg, &region.boundary);
+    let points: Vec<String> = element_outline
+        .iter()
+        .map(|p| format!("{},{}", num(p[0]), num(-p[1])))
+        .collect();
+    let _ = writeln!(
+        svg,
+        "<polygon points=\"{}\" fill=\"none\" stroke=\"black\" stroke-width=\"{}\"/>",
+        points.join(" "),
+        num(stroke),
+    );
+    svg.push_str("</svg>\n");
+    out.write_all(svg.as_bytes())?;
+    out.flush()
+}
+
+/// A tiled planar region (its boundary `loops`, filled as in [`write_svg`]) over its
+/// scaffold, whose element edges (`lines`, polylines) are drawn faintly on top, as one
+/// `<path>`. The viewBox frames the lines (the loops when there are none).
+pub fn scaffold_svg(loops: &[Vec<[f64; 2]>], lines: &[Vec<[f64; 2]>]) -> io::Result<String> {
+    check_finite(loops.iter().chain(lines).flatten())?;
+    let framed: Vec<&[f64; 2]> = if lines.is_empty() {
+        loops.iter().flatten().collect()
+    } else {
+        lines.iter().flatten().collect()
+    };
+    let (mut svg, stroke) = header(&framed);
+    region_path(&mut svg, loops);
+    let mut d = String::new();
+    for line in lines {
+        for (k, p) in line.iter().enumerate() {
+            if !d.is_empty() {
+                d.push(' ');
+            }
+            d.push_str(if k == 0 { "M" } else { "L" });
+            let _ = write!(d, "{},{}", num(p[0]), num(-p[1]));
+        }
+    }
+    let _ = writeln!(
+        svg,
+        "<path d=\"{d}\" fill=\"none\" stroke=\"#808080\" stroke-opacity=\"0.5\" stroke-width=\"{}\"/>",
+        num(0.3 * stroke),
+    );
+    svg.push_str("</svg>\n");
+    Ok(svg)
+}
+
+/// `InvalidInput` naming the first point with a non-finite coordinate.
+fn check_finite<'a>(mut points: impl Iterator<Item = &'a [f64; 2]>) -> io::Result<()> {
+    match points.find(|p| !(p[0].is_finite() && p[1].is_finite())) {
+        Some(p) => Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("point {p:?} has a non-finite coordinate"),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// The opening `<svg>` tag framing `framed` (see the module docs), and the outline's stroke
+/// width.
+fn header(framed: &[&[f64; 2]]) -> (String, f64) {
+    let (min, max) = bounds(framed);
     let size = [max[0] - min[0], max[1] - min[1]];
     let margin = 0.02 * size[0].max(size[1]);
     let stroke = 0.005 * size[0].max(size[1]);
-
     let mut svg = String::new();
-    // Writing to a String cannot fail, so the `fmt::Result`s below are ignored, not unwrapped.
+    // Writing to a String cannot fail, so the `fmt::Result`s here are ignored, not unwrapped.
     let _ = writeln!(
         svg,
         "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"{} {} {} {}\">",
@@ -54,8 +111,13 @@ pub fn write_svg(
         num(size[0] + 2.0 * margin),
         num(size[1] + 2.0 * margin),
     );
+    (svg, stroke)
+}
+
+/// The region: one even-odd filled `<path>` with a `M … L … Z` run per loop.
+fn region_path(svg: &mut String, loops: &[Vec<[f64; 2]>]) {
     let mut d = String::new();
-    for lp in &region.boundary {
+    for lp in loops {
         for (k, p) in lp.iter().enumerate() {
             if !d.is_empty() {
                 d.push(' ');
@@ -71,19 +133,6 @@ pub fn write_svg(
         svg,
         "<path d=\"{d}\" fill=\"#4a7ab5\" fill-rule=\"evenodd\" stroke=\"none\"/>"
     );
-    let points: Vec<String> = element_outline
-        .iter()
-        .map(|p| format!("{},{}", num(p[0]), num(-p[1])))
-        .collect();
-    let _ = writeln!(
-        svg,
-        "<polygon points=\"{}\" fill=\"none\" stroke=\"black\" stroke-width=\"{}\"/>",
-        points.join(" "),
-        num(stroke),
-    );
-    svg.push_str("</svg>\n");
-    out.write_all(svg.as_bytes())?;
-    out.flush()
 }
 
 /// Bounding box of `points`; the reference square `[-½, ½]²` when there are none, so an empty

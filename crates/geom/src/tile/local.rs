@@ -1,9 +1,9 @@
 //! The mesh of one element in reference coordinates, before it is welded to its neighbours.
 //!
 //! Invariants: every vertex lies on one lattice edge `(a, b)` (`a < b`, lattice point indices)
-//! strictly between its ends, or — for cap corners only — on one lattice point `a` (`b ==
-//! POINT`); triangles are counter-clockwise seen from outside the solid in reference
-//! coordinates; `caps[f]` closes the solid on the element's face `f` and is used only where
+//! strictly between its ends, or — for cap corners, and inside corners of a 2D region — on one
+//! lattice point `a` (`b == POINT`); triangles are counter-clockwise seen from outside the
+//! solid in reference coordinates (2D: filled region triangles, counter-clockwise in ξ); `caps[f]` closes the solid on the element's face `f` and is used only where
 //! that face is on the scaffold's boundary.
 
 use std::collections::HashMap;

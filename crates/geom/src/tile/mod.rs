@@ -22,6 +22,9 @@
 //!    depend on the thread count.
 //! 4. **Caps** are kept on scaffold boundary faces (faces used by one element) only.
 //!
+//! 2D scaffolds (tri, quad) are tiled by the same steps into a planar or surface region, see
+//! `planar.rs` ([`tile_surface_scaffold`]); choose by `ElementKind::dimension()`.
+//!
 //! Invariants: the output is closed, manifold and outward-oriented whenever every element
 //! map is orientation-preserving and the scaffold is conforming (each face used by one or two
 //! elements); vertex and triangle order depend only on the scaffold, the cell and the
@@ -30,9 +33,12 @@
 mod cube;
 mod lattice;
 mod local;
+mod planar;
 mod scaffold;
 mod simplex;
 mod skin;
+mod square;
+mod triangle;
 mod weld;
 
 use rayon::prelude::*;
@@ -41,9 +47,13 @@ use crate::element::Element3;
 use crate::field::{ScalarField, Solid};
 use crate::mesh::Mesh;
 use lattice::{Lattice, Weights};
-use weld::{Locals, weld};
+use weld::{Corners, Locals, weld};
 
 pub use cube::HEX_CORNERS;
+pub use planar::{
+    Elements2, RegionError, TiledRegion, TiledShell, extrude, region_svg, surface_element,
+    thickness_normal, tile_planar, tile_surface_scaffold,
+};
 pub use scaffold::{reference_element, tile_scaffold};
 pub use skin::{Skin, tile_scaffold_with_skin};
 
@@ -105,7 +115,7 @@ pub enum TileError {
         given: usize,
         nodes: usize,
     },
-    #[error("{0} scaffolds are surfaces; only volume scaffolds (tet, hex) are tiled so far")]
+    #[error("{0} scaffolds are surfaces: tile them with tile_surface_scaffold")]
     NotVolume(&'static str),
     #[error("the mesh would have {0} vertices, more than 32-bit indices can address")]
     TooManyVertices(u64),
@@ -182,25 +192,35 @@ fn tile_with(
     skin: Option<&Skin>,
     resolution: usize,
 ) -> Result<(Mesh, TileStats), TileError> {
+    check_input(elements.corners, elements.corner_count(), solid, resolution)?;
+    let lattice: Box<dyn Lattice> = match elements.shape {
+        Element3::Cube => Box::new(cube::CubeLattice::new(resolution)),
+        Element3::Tetrahedron => Box::new(simplex::TetLattice::new(resolution)),
+    };
+    tile_on(elements, lattice.as_ref(), solid, skin)
+}
+
+/// The checks every tiling makes before it starts: the resolution, the corner list's length,
+/// and nodal arrays long enough for every node the corners name.
+fn check_input(
+    corners: &[u32],
+    per_element: usize,
+    solid: &TiledSolid,
+    resolution: usize,
+) -> Result<(), TileError> {
     if resolution < 2 {
         return Err(TileError::Resolution(resolution));
     }
     if resolution > 256 {
         return Err(TileError::ResolutionTooHigh(resolution));
     }
-    let per_element = elements.corner_count();
-    if !elements.corners.len().is_multiple_of(per_element) {
+    if !corners.len().is_multiple_of(per_element) {
         return Err(TileError::Corners {
-            len: elements.corners.len(),
+            len: corners.len(),
             per_element,
         });
     }
-    let nodes = elements
-        .corners
-        .iter()
-        .map(|&c| c as usize + 1)
-        .max()
-        .unwrap_or(0);
+    let nodes = corners.iter().map(|&c| c as usize + 1).max().unwrap_or(0);
     for (what, values) in solid.nodal() {
         if values.len() < nodes {
             return Err(TileError::NodalValues {
@@ -210,11 +230,17 @@ fn tile_with(
             });
         }
     }
-    let lattice: Box<dyn Lattice> = match elements.shape {
-        Element3::Cube => Box::new(cube::CubeLattice::new(resolution)),
-        Element3::Tetrahedron => Box::new(simplex::TetLattice::new(resolution)),
-    };
-    let lattice = lattice.as_ref();
+    Ok(())
+}
+
+/// Samples, contours and welds `solid` over `elements` on `lattice` (steps 1–4 of the module
+/// docs), whatever the element's dimension.
+fn tile_on(
+    elements: &dyn Corners,
+    lattice: &dyn Lattice,
+    solid: &TiledSolid,
+    skin: Option<&Skin>,
+) -> Result<(Mesh, TileStats), TileError> {
     let cell = symmetric_samples(lattice, solid.cell);
     if solid.is_uniform() && skin.is_none() {
         let values: Vec<f64> = cell.iter().map(|&v| solid.solid.apply(v)).collect();

@@ -12,6 +12,29 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use super::lattice::{Lattice, Weights};
 use super::local::{LocalMesh, LocalVertex, POINT};
 use super::{Elements, TileError, TileStats};
+
+/// What the weld needs of a set of elements, of any dimension: their count, each one's
+/// global corner nodes (in its lattice's corner order) and where a reference point goes.
+pub trait Corners: Sync {
+    fn count(&self) -> usize;
+    fn element(&self, e: usize) -> &[u32];
+    /// The model position of reference point `xi` in element `e`.
+    fn place(&self, e: usize, xi: [f64; 3]) -> [f64; 3];
+}
+
+impl Corners for Elements<'_> {
+    fn count(&self) -> usize {
+        Elements::count(self)
+    }
+
+    fn element(&self, e: usize) -> &[u32] {
+        Elements::element(self, e)
+    }
+
+    fn place(&self, e: usize, xi: [f64; 3]) -> [f64; 3] {
+        self.map.map(e, xi)
+    }
+}
 use crate::mesh::Mesh;
 
 /// A local vertex on the element boundary: the weights of its lattice ends, and the faces
@@ -35,7 +58,7 @@ enum Role {
 
 /// Which faces of each element lie on the scaffold boundary (one bit per face).
 fn boundary_faces(
-    elements: &Elements,
+    elements: &dyn Corners,
     face_masks: &[u8],
 ) -> Result<(Vec<u8>, TileStats), TileError> {
     let n = elements.count();
@@ -221,7 +244,7 @@ impl Classified {
 
 /// Welds the elements' local meshes into one mesh (see the module docs, step 3).
 pub fn weld(
-    elements: &Elements,
+    elements: &dyn Corners,
     lattice: &dyn Lattice,
     locals: Locals,
 ) -> Result<(Mesh, TileStats), TileError> {
@@ -312,7 +335,7 @@ pub fn weld(
                     group_id[group[slot] as usize].store(next, Ordering::Relaxed);
                 }
                 next += 1;
-                out.push(elements.map.map(e, *xi).map(|c| c as f32));
+                out.push(elements.place(e, *xi).map(|c| c as f32));
             }
             out
         })
