@@ -319,12 +319,17 @@ pub fn weld(
         return Err(TileError::TooManyVertices(base[n]));
     }
     let group_id: Vec<AtomicU32> = (0..groups).map(|_| AtomicU32::new(0)).collect();
-    let positions: Vec<Vec<[f32; 3]>> = (0..n)
+    // Written in place, element by element in parallel: each element's vertices and
+    // triangles have a known range of the output.
+    let mut vertices = vec![[0.0f32; 3]; base[n] as usize];
+    let vertex_ranges = split_by(&mut vertices, owned.iter().map(|&c| c as usize));
+    vertex_ranges
         .into_par_iter()
-        .map(|e| {
+        .enumerate()
+        .for_each(|(e, out)| {
             let c = class(e);
             let mut next = base[e] as u32;
-            let mut out = Vec::with_capacity(owned[e] as usize);
+            let mut out = out.iter_mut();
             for (i, xi) in c.xi.iter().enumerate() {
                 let s = c.shared_index[i];
                 if s != NONE {
@@ -335,16 +340,30 @@ pub fn weld(
                     group_id[group[slot] as usize].store(next, Ordering::Relaxed);
                 }
                 next += 1;
-                out.push(elements.place(e, *xi).map(|c| c as f32));
+                if let Some(v) = out.next() {
+                    *v = elements.place(e, *xi).map(|c| c as f32);
+                }
             }
-            out
-        })
-        .collect();
-    let vertices: Vec<[f32; 3]> = positions.into_iter().flatten().collect();
+        });
 
-    let triangles: Vec<Vec<[u32; 3]>> = (0..n)
+    let triangle_counts: Vec<usize> = (0..n)
         .into_par_iter()
         .map(|e| {
+            let local = locals.get(e);
+            let caps = local.caps.iter().enumerate();
+            local.triangles.len()
+                + caps
+                    .filter(|(f, _)| boundary[e] & 1 << f != 0)
+                    .map(|(_, cap)| cap.len())
+                    .sum::<usize>()
+        })
+        .collect();
+    let mut triangles = vec![[0u32; 3]; triangle_counts.iter().sum()];
+    let triangle_ranges = split_by(&mut triangles, triangle_counts.iter().copied());
+    triangle_ranges
+        .into_par_iter()
+        .enumerate()
+        .for_each(|(e, out)| {
             let (local, c) = (locals.get(e), class(e));
             let mut next = base[e] as u32;
             let ids: Vec<u32> = (0..local.vertices.len())
@@ -365,20 +384,16 @@ pub fn weld(
                     next - 1
                 })
                 .collect();
-            let mut out: Vec<[u32; 3]> = local
-                .triangles
+            let caps = local
+                .caps
                 .iter()
-                .map(|t| t.map(|v| ids[v as usize]))
-                .collect();
-            for (f, cap) in local.caps.iter().enumerate() {
-                if boundary[e] & 1 << f != 0 {
-                    out.extend(cap.iter().map(|t| t.map(|v| ids[v as usize])));
-                }
+                .enumerate()
+                .filter(|(f, _)| boundary[e] & 1 << f != 0)
+                .flat_map(|(_, cap)| cap.iter());
+            for (slot, t) in out.iter_mut().zip(local.triangles.iter().chain(caps)) {
+                *slot = t.map(|v| ids[v as usize]);
             }
-            out
-        })
-        .collect();
-    let triangles = triangles.into_iter().flatten().collect();
+        });
     Ok((
         Mesh {
             vertices,
@@ -386,6 +401,18 @@ pub fn weld(
         },
         stats,
     ))
+}
+
+/// `items` cut into consecutive slices of the given lengths (which sum to its length).
+fn split_by<T>(items: &mut [T], lengths: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
+    let mut rest = items;
+    let mut slices = Vec::new();
+    for len in lengths {
+        let (head, tail) = std::mem::take(&mut rest).split_at_mut(len);
+        slices.push(head);
+        rest = tail;
+    }
+    slices
 }
 
 /// Reference coordinates of a local vertex.
