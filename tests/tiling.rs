@@ -347,4 +347,14 @@ resolution = 4
         ),
         "{err}"
     );
+    // A triangle file under a D4 cell: the group check names the file, element and groups.
+    std::fs::write(p.path().join("plate.msh"), data("plate_hole_tri3.msh")).expect("write");
+    let err = build_error(&p);
+    assert!(
+        err.contains(
+            "`plate.msh` has tri3 elements, which need a cell of group `D3`, but `s` of \
+             `outputs.a` has group `D4`"
+        ),
+        "{err}"
+    );
 }

@@ -202,3 +202,21 @@ fn extrude_and_thickness_normal_need_a_2d_grid_and_exclude_each_other() {
         ],
     );
 }
+
+#[test]
+fn two_dimensional_grids_need_d4_or_d3_cells() {
+    assert_errors(
+        "[cells.q]\nexpr = \"cos(tau*x) + cos(tau*y)\"\nsymmetry = \"D4\"\n\n\
+         [cells.r]\nexpr = \"cos(2*tau*x) + cos(2*tau*y)\"\nsymmetry = \"D3\"\n\n\
+         [scaffolds.quads]\ngrid = { min = [0, 0], max = [4, 2], divisions = 2, element = \"quad\" }\n\n\
+         [scaffolds.tris]\ngrid = { min = [0, 0], max = [4, 2], divisions = 2, element = \"tri\" }\n\n\
+         [outputs.a]\nscaffold = \"quads\"\ncell = \"r\"\n\n\
+         [outputs.b]\nscaffold = \"tris\"\ncell = \"q\"\n",
+        &[
+            "`outputs.a.cell` does not fit the scaffold's elements",
+            "cell `r` has group `D3`, but quad4 elements need `D4`",
+            "`outputs.b.cell` does not fit the scaffold's elements",
+            "cell `q` has group `D4`, but tri3 elements need `D3`",
+        ],
+    );
+}
