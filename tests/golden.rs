@@ -100,8 +100,13 @@ fn tiling(report: &serde_json::Value) -> String {
     if t.is_null() {
         return String::new();
     }
+    // 2D scaffolds also report the tiled region's area.
+    let region = match t["region_area"].as_f64() {
+        Some(area) => format!(" region_area {area:.6e}"),
+        None => String::new(),
+    };
     format!(
-        "  tiling {} elements {} interior_faces {} boundary_faces {} scaffold_volume {:.6e}\n",
+        "  tiling {} elements {} interior_faces {} boundary_faces {} scaffold_volume {:.6e}{region}\n",
         t["element"].as_str().expect("element"),
         t["elements"],
         t["interior_faces"],

@@ -190,9 +190,7 @@ resolution = 8
     assert_eq!(only(&r)["tiling"]["element"], "tet4");
 }
 
-#[test]
-fn two_dimensional_scaffolds_are_refused_clearly() {
-    let manifest = r#"
+const PLATE: &str = r#"
 [cells.s]
 expr = "cos(tau*x) + cos(tau*y)"
 symmetry = "D4"
@@ -204,11 +202,159 @@ grid = { min = [0, 0], max = [4, 2], divisions = [4, 2], element = "quad" }
 [outputs.a]
 scaffold = "plate"
 cell = "s"
+resolution = 16
+"#;
+
+#[test]
+fn a_quad_grid_region_covers_half_and_extrudes_to_area_times_h() {
+    // cos 2πx + cos 2πy changes sign under a shift by (½, ½), which maps the element (one
+    // period) onto itself: Φ < 0 covers half of every element, so half of the 4 × 2 plate.
+    let p = Project::new(PLATE);
+    let r = p.build(&[]);
+    let r = only(&r);
+    let tiling = &r["tiling"];
+    assert_eq!(tiling["element"], "quad4");
+    assert_eq!(tiling["elements"], 8);
+    // 3 interior vertical lines of 2 edges and 1 horizontal of 4; 2 × (4 + 2) on the border.
+    assert_eq!(tiling["interior_faces"], 10);
+    assert_eq!(tiling["boundary_faces"], 12);
+    assert!((number(tiling, "scaffold_volume") - 8.0).abs() < 1e-12);
+    assert_eq!(r["planar"], true);
+    assert_eq!(r["manifold"], true);
+    let fraction = number(r, "volume_fraction");
+    println!("quad grid area fraction {fraction}");
+    assert!((fraction - 0.5).abs() < 3e-3, "fraction {fraction}");
+    let region_area = number(tiling, "region_area");
+    assert!((number(r, "area") - region_area).abs() < 1e-4 * region_area);
+    // The SVG holds the filled region and the scaffold's edges, drawn faintly.
+    let svg = std::fs::read_to_string(p.out("a.svg")).expect("a.svg");
+    assert!(svg.contains("fill-rule=\"evenodd\"") && svg.contains("stroke=\"#808080\""));
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+
+    let h = 0.5;
+    let extruded = p.build(&["--set", "outputs.a.extrude=0.5"]);
+    let e = only(&extruded);
+    assert_eq!(e["watertight"], true);
+    assert_eq!(e["manifold"], true);
+    let volume = number(e, "volume");
+    let area = number(&e["tiling"], "region_area");
+    println!("extruded volume {volume}, region area × h {}", area * h);
+    assert!(
+        (volume - area * h).abs() < 1e-5 * volume,
+        "{volume} vs {}",
+        area * h
+    );
+    assert!((volume - 0.5 * 8.0 * h).abs() < 3e-3 * 8.0 * h);
+    assert!((number(&e["tiling"], "scaffold_volume") - 8.0 * h).abs() < 1e-12);
+    // A solid is written as a mesh only: no drawing.
+    let files = e["files"].as_array().expect("files");
+    assert!(
+        files
+            .iter()
+            .all(|f| !f.as_str().unwrap_or("").ends_with(".svg")),
+        "{files:?}"
+    );
+}
+
+#[test]
+fn a_sphere_surface_thickened_along_its_normals_is_closed_with_volume_area_times_h() {
+    let manifest = r#"
+[cells.t]
+expr = "cos(2*tau*x) + cos(2*tau*y) - 0.3"
+symmetry = "D3"
+fit = { n = 16 }
+
+[scaffolds.sphere]
+mesh = "sphere.msh"
+
+[outputs.a]
+scaffold = "sphere"
+cell = "t"
+thickness_normal = 0.2
+resolution = 6
 "#;
     let p = Project::new(manifest);
+    std::fs::write(p.path().join("sphere.msh"), data("sphere_surface_tri3.msh")).expect("write");
+    let r = p.build(&[]);
+    let r = only(&r);
+    assert_eq!(r["watertight"], true);
+    assert_eq!(r["manifold"], true);
+    assert_eq!(r["tiling"]["element"], "tri3");
+    assert_eq!(r["tiling"]["elements"], 898);
+    // A closed surface: every edge interior.
+    assert_eq!(r["tiling"]["boundary_faces"], 0);
+    let (volume, area) = (number(r, "volume"), number(&r["tiling"], "region_area"));
+    println!("shell volume {volume}, mid area × h {}", area * 0.2);
+    assert!(
+        (volume / (area * 0.2) - 1.0).abs() < 5e-3,
+        "{volume} vs {}",
+        area * 0.2
+    );
+}
+
+#[test]
+fn two_dimensional_keys_on_the_wrong_scaffold_name_the_file_and_element() {
+    // `extrude` on a curved surface, and on a hexahedral file; `skin` on a planar file.
+    let p = Project::new(
+        r#"
+[cells.t]
+expr = "cos(2*tau*x) + cos(2*tau*y) - 0.3"
+symmetry = "D3"
+fit = { n = 16 }
+
+[scaffolds.sphere]
+mesh = "sphere.msh"
+
+[outputs.a]
+scaffold = "sphere"
+cell = "t"
+extrude = 1
+resolution = 4
+"#,
+    );
+    std::fs::write(p.path().join("sphere.msh"), data("sphere_surface_tri3.msh")).expect("write");
     let err = build_error(&p);
     assert!(
-        err.contains("the grid `plate` has quad4 elements: tiling 2D scaffolds"),
+        err.contains(
+            "`outputs.a.extrude` needs a planar scaffold (every node at one z), but \
+             `sphere.msh` is a curved surface of tri3 elements"
+        ),
+        "{err}"
+    );
+    let p = Project::new(&FILE.replace("offset = 0.5", "extrude = 2"));
+    std::fs::write(p.path().join("box.msh"), data("box_4x3x2_hex8.msh")).expect("write");
+    let err = build_error(&p);
+    assert!(
+        err.contains(
+            "`outputs.a.extrude` applies only to 2D scaffolds (quad, tri), but `box.msh` has \
+             hex8 elements"
+        ),
+        "{err}"
+    );
+    let p = Project::new(
+        &PLATE
+            .replace(
+                "grid = { min = [0, 0], max = [4, 2], divisions = [4, 2], element = \"quad\" }",
+                "mesh = \"plate.msh\"",
+            )
+            .replace("resolution = 16", "skin = 0.1"),
+    );
+    std::fs::write(p.path().join("plate.msh"), data("plate_hole_quad4.msh")).expect("write");
+    let err = build_error(&p);
+    assert!(
+        err.contains(
+            "`outputs.a.skin` does not apply to 2D scaffolds, but `plate.msh` has quad4 elements"
+        ),
+        "{err}"
+    );
+    // A triangle file under a D4 cell: the group check names the file, element and groups.
+    std::fs::write(p.path().join("plate.msh"), data("plate_hole_tri3.msh")).expect("write");
+    let err = build_error(&p);
+    assert!(
+        err.contains(
+            "`plate.msh` has tri3 elements, which need a cell of group `D3`, but `s` of \
+             `outputs.a` has group `D4`"
+        ),
         "{err}"
     );
 }

@@ -295,7 +295,7 @@ pub const MAX_GRID_ELEMENTS: usize = 10_000_000;
 /// An output tiling a symmetric cell (or a transition between two) into every element of a
 /// scaffold. Validation guarantees the scaffold and cells exist, the cells have named groups
 /// (one group, for a transition), the group matches a grid's element, `2 ≤ resolution ≤ 256`
-/// and `skin > 0`.
+/// and `skin > 0`; `thicken` is positive and, on a grid, only on a 2D one (with no `skin`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct TiledOutput {
     pub name: Name,
@@ -312,9 +312,36 @@ pub struct TiledOutput {
     pub resolution: usize,
     /// A closed skin of this thickness (model units) along the scaffold's boundary.
     pub skin: Option<f64>,
+    /// For a 2D scaffold, how its tiled region becomes a solid (`None`: the region itself).
+    pub thicken: Option<Thicken>,
     pub formats: Vec<Format>,
     pub encoding: Encoding,
     pub stem: String,
+}
+
+/// How the region tiled into a 2D scaffold is made a closed solid (lengths in model units).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Thicken {
+    /// `extrude = h`: a planar region swept by `h` along +z.
+    Extrude(f64),
+    /// `thickness_normal = h`: `±h/2` along the surface's normals.
+    ThicknessNormal(f64),
+}
+
+impl Thicken {
+    /// The manifest key.
+    pub fn key(self) -> &'static str {
+        match self {
+            Thicken::Extrude(_) => "extrude",
+            Thicken::ThicknessNormal(_) => "thickness_normal",
+        }
+    }
+
+    pub fn length(self) -> f64 {
+        match self {
+            Thicken::Extrude(h) | Thicken::ThicknessNormal(h) => h,
+        }
+    }
 }
 
 /// `cell = { blend = [a, b], by = … }`: `Φ = (1 − w) Φ_a + w Φ_b`, with `w` clamped to [0, 1].

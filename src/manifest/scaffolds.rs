@@ -1,6 +1,7 @@
 //! The schema of tiling: `[scaffolds.NAME]` (`mesh = "file"` or `grid = { … }`) and outputs
 //! that tile a symmetric cell into a scaffold (`scaffold`, `cell` or `cell = { blend, by }`,
-//! graded `thickness`/`offset`, `resolution`, `skin`).
+//! graded `thickness`/`offset`, `resolution`, `skin`, and for 2D scaffolds `extrude` or
+//! `thickness_normal`).
 //!
 //! A child of `schema.rs` (it extends its `Checker`). Invariants:
 //! - No IO and no geometry: a scaffold file's name is resolved and its extension checked
@@ -9,6 +10,8 @@
 //! - The group check happens as early as the facts allow: a cell without a named group, or a
 //!   transition between two groups, is an error here; so is a group that does not match a
 //!   grid's element (a mesh file's element is checked by the stage, naming the file).
+//! - `extrude`/`thickness_normal` are positive and exclusive; on a grid they need 2D elements
+//!   and `skin` needs 3D ones (a mesh file's dimension is checked by the stage).
 //! - Expressions (`by`, `thickness`, `offset`) are parsed here, their errors shown inside the
 //!   string; `"nodedata:NAME"` on a generated grid is an error (grids have no node data).
 //! - Keys of box outputs (`domain`, `samples`, `within`, …) beside `scaffold` are errors
@@ -27,7 +30,7 @@ use toml::de::DeValue;
 use super::super::expression;
 use super::super::model::{
     Cell, GroupSpec, MAX_GRID_ELEMENTS, NodalValue, Scaffold, ScaffoldGrid, ScaffoldSource,
-    TiledOutput, TiledTransition, tiling_group,
+    Thicken, TiledOutput, TiledTransition, tiling_group,
 };
 use super::meshes::FileKind;
 use super::{Checker, Fields, Key, OUTPUT_KEYS, Value};
@@ -37,7 +40,7 @@ const GRID_KEYS: [&str; 4] = ["min", "max", "divisions", "element"];
 const GRID_ELEMENTS: [&str; 4] = ["hex", "tet", "quad", "tri"];
 const TRANSITION_KEYS: [&str; 2] = ["blend", "by"];
 /// The keys a tiled output reads; the other output keys are errors beside `scaffold`.
-const TILED_KEYS: [&str; 10] = [
+const TILED_KEYS: [&str; 12] = [
     "scaffold",
     "cell",
     "solid",
@@ -45,13 +48,17 @@ const TILED_KEYS: [&str; 10] = [
     "thickness",
     "resolution",
     "skin",
+    "extrude",
+    "thickness_normal",
     "formats",
     "ascii",
     "path",
 ];
+/// The keys that make a 2D scaffold's region a solid (at most one).
+const THICKEN_KEYS: [&str; 2] = ["extrude", "thickness_normal"];
 /// Every output key plus the tiled output's own, for unknown-key suggestions.
-const ALL_KEYS: [&str; 18] = {
-    let mut all = [""; 18];
+const ALL_KEYS: [&str; 20] = {
+    let mut all = [""; 20];
     let mut i = 0;
     while i < OUTPUT_KEYS.len() {
         all[i] = OUTPUT_KEYS[i];
@@ -59,6 +66,8 @@ const ALL_KEYS: [&str; 18] = {
     }
     all[16] = "scaffold";
     all[17] = "resolution";
+    all[18] = THICKEN_KEYS[0];
+    all[19] = THICKEN_KEYS[1];
     all
 };
 pub(crate) const DEFAULT_RESOLUTION: usize = 12;
@@ -416,8 +425,18 @@ impl Checker<'_, '_, '_> {
         };
         let skin = match fields.get("skin") {
             None => Some(None),
+            Some((_, v)) if grid_element.is_some_and(|e| e.dimension() == 2) => {
+                self.error(
+                    v.span(),
+                    &format!("`{}` does not apply to a 2D scaffold", path("skin")),
+                    "skins close the tiling of a 3D scaffold",
+                    Some("remove it; `extrude = h` or `thickness_normal = h` makes a 2D region a solid"),
+                );
+                None
+            }
             Some((_, v)) => self.positive_number(&path("skin"), v, "a number").map(Some),
         };
+        let thicken = self.thicken(name, &fields, grid_element);
         let formats = self.formats(&path("formats"), fields.get("formats"));
         let encoding = match fields.get("ascii") {
             None => Some(Encoding::Binary),
@@ -448,10 +467,61 @@ impl Checker<'_, '_, '_> {
             offset,
             resolution: resolution?,
             skin: skin?,
+            thicken: thicken?,
             formats: formats?,
             encoding: encoding?,
             stem: stem?,
         })
+    }
+
+    /// `extrude = h` or `thickness_normal = h` (one at most, positive); on a grid, only when
+    /// its elements are 2D (a mesh file's are checked by the stage).
+    fn thicken(
+        &mut self,
+        output: &str,
+        fields: &Fields<'_, '_>,
+        grid_element: Option<ElementKind>,
+    ) -> Option<Option<Thicken>> {
+        let given: Vec<(&str, &Value<'_>)> = THICKEN_KEYS
+            .iter()
+            .filter_map(|&k| fields.get(k).map(|(_, v)| (k, *v)))
+            .collect();
+        let (key, value) = match given.as_slice() {
+            [] => return Some(None),
+            [one] => *one,
+            [a, b, ..] => {
+                let later = if b.1.span().start > a.1.span().start {
+                    b
+                } else {
+                    a
+                };
+                self.error(
+                    later.1.span(),
+                    &format!("both `extrude` and `thickness_normal` given in output `{output}`"),
+                    "a 2D region is extruded along z or thickened along its normals, not both",
+                    Some("remove one of them"),
+                );
+                return None;
+            }
+        };
+        let path = format!("outputs.{output}.{key}");
+        if let Some(element) = grid_element.filter(|e| e.dimension() != 2) {
+            self.error(
+                value.span(),
+                &format!("`{path}` applies only to 2D scaffolds"),
+                &format!(
+                    "the grid's elements are {}, which tile into a solid already",
+                    element.name()
+                ),
+                Some("remove it, or use a grid of `element = \"quad\"` or `\"tri\"`"),
+            );
+            return None;
+        }
+        let h = self.positive_number(&path, value, "a length (model units)")?;
+        Some(Some(match key {
+            "extrude" => Thicken::Extrude(h),
+            _ => Thicken::ThicknessNormal(h),
+        }))
     }
 
     /// `cell = "a"` or `cell = { blend = ["a", "b"], by = "…" }`: the cell, the transition, and

@@ -167,3 +167,56 @@ fn tiled_outputs_check_their_own_keys() {
         ],
     );
 }
+
+#[test]
+fn extrude_and_thickness_normal_need_a_2d_grid_and_exclude_each_other() {
+    let quad = "[cells.q]\nexpr = \"cos(tau*x) + cos(tau*y)\"\nsymmetry = \"D4\"\n\n\
+                [scaffolds.plate]\ngrid = { min = [0, 0], max = [4, 2], divisions = [4, 2], element = \"quad\" }\n\n\
+                [scaffolds.block]\ngrid = { min = [0, 0, 0], max = [1, 1, 1], divisions = 2, element = \"hex\" }\n\n";
+    let ok = parse_ok(
+        &format!(
+            "{quad}[outputs.a]\nscaffold = \"plate\"\ncell = \"q\"\nextrude = 0.5\n\n\
+         [outputs.b]\nscaffold = \"plate\"\ncell = \"q\"\nthickness_normal = 2\n"
+        ),
+        &[],
+    );
+    assert_eq!(ok.tiled_outputs["a"].thicken, Some(Thicken::Extrude(0.5)));
+    assert_eq!(
+        ok.tiled_outputs["b"].thicken,
+        Some(Thicken::ThicknessNormal(2.0))
+    );
+    assert_errors(
+        &format!(
+            "{quad}[outputs.a]\nscaffold = \"plate\"\ncell = \"q\"\nextrude = 0.5\nthickness_normal = 1\n\n\
+             [outputs.b]\nscaffold = \"block\"\ncell = \"q\"\nextrude = 1\n\n\
+             [outputs.c]\nscaffold = \"plate\"\ncell = \"q\"\nskin = 0.1\nextrude = -1\n"
+        ),
+        &[
+            "both `extrude` and `thickness_normal` given in output `a`",
+            "--> lattice.toml:15:20",
+            "`outputs.b.cell` does not fit the scaffold's elements",
+            "`outputs.b.extrude` applies only to 2D scaffolds",
+            "the grid's elements are hex8",
+            "`outputs.c.skin` does not apply to a 2D scaffold",
+            "`outputs.c.extrude` must be greater than 0",
+        ],
+    );
+}
+
+#[test]
+fn two_dimensional_grids_need_d4_or_d3_cells() {
+    assert_errors(
+        "[cells.q]\nexpr = \"cos(tau*x) + cos(tau*y)\"\nsymmetry = \"D4\"\n\n\
+         [cells.r]\nexpr = \"cos(2*tau*x) + cos(2*tau*y)\"\nsymmetry = \"D3\"\n\n\
+         [scaffolds.quads]\ngrid = { min = [0, 0], max = [4, 2], divisions = 2, element = \"quad\" }\n\n\
+         [scaffolds.tris]\ngrid = { min = [0, 0], max = [4, 2], divisions = 2, element = \"tri\" }\n\n\
+         [outputs.a]\nscaffold = \"quads\"\ncell = \"r\"\n\n\
+         [outputs.b]\nscaffold = \"tris\"\ncell = \"q\"\n",
+        &[
+            "`outputs.a.cell` does not fit the scaffold's elements",
+            "cell `r` has group `D3`, but quad4 elements need `D4`",
+            "`outputs.b.cell` does not fit the scaffold's elements",
+            "cell `q` has group `D4`, but tri3 elements need `D3`",
+        ],
+    );
+}

@@ -70,8 +70,10 @@ pub struct MeshArtifact {
     pub tiling: Option<TilingSummary>,
 }
 
-/// What the `tile` stage reports besides the mesh: the scaffold's elements and faces, and its
-/// volume (the reference of the volume fraction).
+/// What the `tile` stage reports besides the mesh: the scaffold's elements and faces (edges,
+/// for a 2D scaffold), and its volume (the reference of the volume fraction). For a 2D
+/// scaffold `scaffold_volume` is its area, times `h` when the region is extruded or thickened
+/// by `h`, and `region_area` is the tiled region's area (the mid-surface's, when thickened).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TilingSummary {
     /// The element kind (`tet4`, `hex27`, …).
@@ -81,14 +83,23 @@ pub struct TilingSummary {
     pub boundary_faces: u64,
     /// From the elements' isoparametric maps (curved for quadratic elements).
     pub scaffold_volume: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub region_area: Option<f64>,
 }
 
-/// What the SVG of a 2D cell needs: the region's boundary loops and the element's outline.
+/// What the SVG of a 2D region needs, and the area its fraction is over. A 2D cell carries its
+/// boundary loops and the element's outline (drawn by the write stage); a region tiled into a
+/// planar scaffold its finished drawing (`svg`, the scaffold drawn faintly); a region tiled
+/// into a curved surface neither (no SVG: `element` and `svg` are empty).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Planar {
     pub boundary: Vec<Vec<[f64; 2]>>,
     pub element: Vec<[f64; 2]>,
+    /// The element's area, or the scaffold's for a tiled region.
     pub element_area: f64,
+    // Absent for cells, so their payloads (and hashes) are what they were before tiling.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub svg: Option<String>,
 }
 
 /// The JSON part of a mesh payload.

@@ -235,6 +235,7 @@ fn planar_output(region: PlanarRegion, frame: Vec<[f64; 2]>, area: f64) -> (Mesh
         boundary: region.boundary,
         element: frame,
         element_area: area,
+        svg: None,
     };
     (region.mesh, Some(planar))
 }

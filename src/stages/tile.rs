@@ -2,6 +2,10 @@
 //! element of a scaffold — a mesh file's bytes or a generated grid — as one checked mesh, with
 //! what the tiling found (elements, interior and boundary faces, the scaffold's volume).
 //!
+//! A 2D scaffold (quad, tri; planar or a surface in 3D) tiles into a region: by itself an open
+//! triangle mesh, reported by its area over the scaffold's (a planar one also drawn as SVG over
+//! its scaffold), or made a closed solid by `extrude` (planar only) or `thickness_normal`.
+//!
 //! Invariants:
 //! - A pure function of its parameters and its inputs: the cells' coefficient tables (one, or
 //!   two for a transition) and, for a `mesh =` scaffold, the file's bytes (last input). The
@@ -12,22 +16,29 @@
 //!   element tag), missing node-data views (listing those the file has), non-finite or
 //!   non-positive graded values (by node tag). Transition weights are clamped to [0, 1].
 //! - Expressions are evaluated at the scaffold's node positions (model units).
+//! - `extrude`/`thickness_normal` on a 3D scaffold, `skin` on a 2D one, and `extrude` on a
+//!   curved surface are errors naming the file and its element kind.
 
 use latticebuild_geom::expr;
 use latticebuild_geom::field::{ScalarField, Solid};
+use latticebuild_geom::mesh::Mesh;
 use latticebuild_geom::scaffold::{self, ElementKind, Scaffold};
-use latticebuild_geom::tile::{TiledSolid, Transition, tile_scaffold_with_skin};
+use latticebuild_geom::tile::{
+    RegionError, TiledRegion, TiledSolid, Transition, extrude, region_svg, thickness_normal,
+    tile_scaffold_with_skin, tile_surface_scaffold,
+};
 use latticebuild_geom::validate;
 
-use super::artifact::{MeshArtifact, MeshSummary, TilingSummary};
+use super::artifact::{MeshArtifact, MeshSummary, Planar, TilingSummary};
 use super::symmetric::{FittedPayload, group_of};
 use crate::build::StageProgress;
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::{
-    GroupSpec, Manifest, NodalValue, ScaffoldGrid, ScaffoldSource, TiledOutput, tiling_group,
+    GroupSpec, Manifest, NodalValue, ScaffoldGrid, ScaffoldSource, Thicken, TiledOutput,
+    tiling_group,
 };
 
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 
 /// Where the scaffold comes from.
 #[derive(Clone, Debug, PartialEq)]
@@ -54,6 +65,8 @@ pub struct TileStage {
     pub offset: Option<NodalValue>,
     pub resolution: usize,
     pub skin: Option<f64>,
+    /// How a 2D scaffold's region becomes a solid (`None`: the region).
+    pub thicken: Option<Thicken>,
 }
 
 fn nodal_param(value: &Option<NodalValue>) -> Param {
@@ -94,6 +107,7 @@ impl TileStage {
             offset: output.offset.clone(),
             resolution: output.resolution,
             skin: output.skin,
+            thicken: output.thicken,
         }
     }
 
@@ -127,6 +141,13 @@ impl TileStage {
             .param("graded_offset", nodal_param(&self.offset))
             .param("resolution", Param::U64(self.resolution as u64))
             .param("skin", self.skin.unwrap_or(0.0))
+            .param(
+                "thicken",
+                Param::List(match self.thicken {
+                    None => Vec::new(),
+                    Some(t) => vec![Param::Str(t.key().into()), Param::F64(t.length())],
+                }),
+            )
     }
 
     /// How many inputs are cells (the rest is the scaffold file, if any).
@@ -158,7 +179,7 @@ impl TileStage {
         }
     }
 
-    /// The element kind against the cells' group, and 2D scaffolds (not tiled yet).
+    /// The element kind against the cells' group, and the keys that need 2D (or 3D) elements.
     fn check_kind(&self, kind: ElementKind) -> Result<(), String> {
         let needed = tiling_group(kind);
         let GroupSpec::Named(group) = &self.group else {
@@ -180,14 +201,24 @@ impl TileStage {
                 if self.cells.len() > 1 { "have" } else { "has" }
             ));
         }
-        if kind.dimension() == 2 {
-            return Err(format!(
-                "{} has {} elements: tiling 2D scaffolds (quad, tri) is not supported yet",
+        match (kind.dimension(), self.thicken, self.skin) {
+            (2, _, Some(_)) => Err(format!(
+                "`outputs.{}.skin` does not apply to 2D scaffolds, but {} has {} elements: \
+                 use `extrude = h` or `thickness_normal = h` to make the region a solid",
+                self.output,
                 self.source(),
                 kind.name()
-            ));
+            )),
+            (3, Some(thicken), _) => Err(format!(
+                "`outputs.{}.{}` applies only to 2D scaffolds (quad, tri), but {} has {} \
+                 elements, which tile into a solid already",
+                self.output,
+                thicken.key(),
+                self.source(),
+                kind.name()
+            )),
+            _ => Ok(()),
         }
-        Ok(())
     }
 
     /// Runs the stage on the cells' coefficient tables and, for a file, its bytes.
@@ -232,6 +263,9 @@ impl TileStage {
             offset: offset.as_deref(),
         };
         progress.phase("tiling");
+        if scaffold.kind.dimension() == 2 {
+            return self.tile_surface(&scaffold, &solid, progress);
+        }
         let (mesh, stats) = tile_scaffold_with_skin(&scaffold, &solid, self.skin, self.resolution)
             .map_err(|e| format!("tiling {}: {e}", self.source()))?;
         if mesh.is_empty() {
@@ -254,6 +288,84 @@ impl TileStage {
                 interior_faces: stats.interior_faces as u64,
                 boundary_faces: stats.boundary_faces as u64,
                 scaffold_volume: scaffold.measure(),
+                region_area: None,
+            }),
+        })
+    }
+
+    /// A 2D scaffold: its region, drawn when planar, or the closed solid made of it.
+    fn tile_surface(
+        &self,
+        scaffold: &Scaffold,
+        solid: &TiledSolid,
+        progress: &dyn StageProgress,
+    ) -> Result<MeshArtifact, String> {
+        let fail = |e: RegionError| format!("tiling {}: {e}", self.source());
+        let scaffold_area = scaffold.measure();
+        let (mesh, region, planar, scaffold_volume): (Mesh, TiledRegion, _, _) = match self.thicken
+        {
+            None => {
+                let region =
+                    tile_surface_scaffold(scaffold, solid, self.resolution).map_err(fail)?;
+                let svg = region
+                    .planar
+                    .then(|| region_svg(&region, scaffold))
+                    .transpose()
+                    .map_err(fail)?;
+                let planar = Planar {
+                    boundary: Vec::new(),
+                    element: Vec::new(),
+                    element_area: scaffold_area,
+                    svg,
+                };
+                (region.mesh.clone(), region, Some(planar), scaffold_area)
+            }
+            Some(Thicken::Extrude(h)) => {
+                let region =
+                    tile_surface_scaffold(scaffold, solid, self.resolution).map_err(fail)?;
+                if !region.planar {
+                    return Err(format!(
+                        "`outputs.{}.extrude` needs a planar scaffold (every node at one z), \
+                         but {} is a curved surface of {} elements: use `thickness_normal = \
+                         {h}` to thicken it along its normals",
+                        self.output,
+                        self.source(),
+                        scaffold.kind.name()
+                    ));
+                }
+                let mesh = if region.mesh.is_empty() {
+                    Mesh::default()
+                } else {
+                    extrude(&region, h).map_err(fail)?
+                };
+                (mesh, region, None, scaffold_area * h)
+            }
+            Some(Thicken::ThicknessNormal(h)) => {
+                let shell = thickness_normal(scaffold, solid, self.resolution, h).map_err(fail)?;
+                (shell.mesh, shell.mid, None, scaffold_area * h)
+            }
+        };
+        if region.mesh.is_empty() {
+            return Err(format!(
+                "the tiled region of `outputs.{}` is empty: the cell has no solid part at this \
+                 offset or thickness",
+                self.output
+            ));
+        }
+        progress.phase("checking the mesh");
+        let summary = MeshSummary::from_check(&validate::check(&mesh));
+        Ok(MeshArtifact {
+            mesh,
+            summary,
+            planar,
+            domain: None,
+            tiling: Some(TilingSummary {
+                element: scaffold.kind.name().to_string(),
+                elements: region.stats.elements as u64,
+                interior_faces: region.stats.interior_faces as u64,
+                boundary_faces: region.stats.boundary_faces as u64,
+                scaffold_volume,
+                region_area: Some(region.area),
             }),
         })
     }

@@ -85,8 +85,13 @@ impl WriteStage {
             })
             .collect::<Result<Vec<_>, String>>()?;
         let mut files = files;
-        if let Some(planar) = &artifact.planar {
-            // A 2D cell also gets its region as an SVG drawing.
+        let drawn = artifact
+            .planar
+            .as_ref()
+            .filter(|p| p.svg.is_some() || !p.element.is_empty());
+        if let Some(planar) = drawn {
+            // A planar region also gets an SVG drawing: a 2D cell's is drawn here, a tiled
+            // region's came drawn (with its scaffold) from the tile stage.
             let path = format!("{}.svg", self.stem);
             let region = PlanarRegion {
                 mesh: Default::default(),
@@ -94,8 +99,9 @@ impl WriteStage {
                 boundary: planar.boundary.clone(),
             };
             let (bytes, modified_ns) = sink
-                .write_file(&path, &mut |w| {
-                    mesh_io::write_svg(&region, &planar.element, w)
+                .write_file(&path, &mut |w| match &planar.svg {
+                    Some(svg) => w.write_all(svg.as_bytes()),
+                    None => mesh_io::write_svg(&region, &planar.element, w),
                 })
                 .map_err(|e| format!("cannot write `{path}`: {e}"))?;
             files.push(WrittenFile {
