@@ -44,7 +44,7 @@
 
 use crate::element::lattice_clip;
 use crate::mesh::Mesh;
-use std::collections::HashMap;
+use rayon::prelude::*;
 
 /// A 2D reference element (METHOD §1), in Cartesian coordinates.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -223,7 +223,10 @@ pub fn contour_planar_box(
 fn region_of(lattice: &Lattice, field: &(dyn Fn([f64; 2]) -> f64 + Sync)) -> PlanarRegion {
     let values = lattice.sample(field);
     let (mesh, positions) = march(lattice, &values);
-    let boundary = boundary_loops(&mesh, &positions);
+    let boundary: Vec<Vec<[f64; 2]>> = boundary_loops(&mesh)
+        .iter()
+        .map(|l| l.iter().map(|&v| positions[v as usize]).collect())
+        .collect();
     PlanarRegion {
         mesh,
         positions,
@@ -405,32 +408,48 @@ fn march(lattice: &Lattice, values: &[f64]) -> (Mesh, Vec<[f64; 2]>) {
     )
 }
 
-/// Chains the edges used by one triangle into closed loops, each edge directed as in its
-/// triangle (region on the left). Loops start at the earliest boundary edge in triangle order,
-/// so the result is deterministic.
-fn boundary_loops(mesh: &Mesh, positions: &[[f64; 2]]) -> Vec<Vec<[f64; 2]>> {
-    let mut directed: HashMap<(u32, u32), u32> = HashMap::new();
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+/// Chains the edges used by one triangle into closed loops, directed as in their triangle.
+/// Loops start at the earliest boundary edge in triangle order; at a vertex with several
+/// outgoing boundary edges (where the region touches itself) the earliest unused is taken, so
+/// the result is deterministic and every loop is closed. Edges are matched by sorting their
+/// undirected keys (no hashing: this runs over tens of millions of edges).
+pub(crate) fn boundary_loops(mesh: &Mesh) -> Vec<Vec<u32>> {
+    let directed = |slot: usize| {
+        let t = mesh.triangles[slot / 3];
+        (t[slot % 3], t[(slot % 3 + 1) % 3])
+    };
+    let mut keys: Vec<(u64, u32)> = (0..mesh.triangles.len() * 3)
+        .into_par_iter()
+        .map(|slot| {
+            let (a, b) = directed(slot);
+            (u64::from(a.min(b)) << 32 | u64::from(a.max(b)), slot as u32)
+        })
+        .collect();
+    keys.par_sort_unstable();
+    // Keys used once are boundary edges (twice: interior, in opposite directions on an
+    // edge-manifold region); in triangle order.
+    let mut slots: Vec<u32> = Vec::new();
+    let mut i = 0;
+    while i < keys.len() {
+        let mut j = i + 1;
+        while j < keys.len() && keys[j].0 == keys[i].0 {
+            j += 1;
         }
-    }
-    // In triangle order: a boundary edge is one whose reverse no triangle uses.
-    let mut edges: Vec<(u32, u32)> = Vec::new();
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            if !directed.contains_key(&(b, a)) {
-                edges.push((a, b));
-            }
+        if j - i == 1 {
+            slots.push(keys[i].1);
         }
+        i = j;
     }
-    // Outgoing boundary edges per vertex. The face rule leaves every boundary vertex with one
-    // in and one out; a list keeps the walk well defined even if that ever failed.
-    let mut outgoing: HashMap<u32, Vec<usize>> = HashMap::new();
-    for (e, &(a, _)) in edges.iter().enumerate().rev() {
-        outgoing.entry(a).or_default().push(e);
-    }
+    drop(keys);
+    slots.sort_unstable();
+    let edges: Vec<(u32, u32)> = slots.iter().map(|&s| directed(s as usize)).collect();
+    // Outgoing edges of each vertex: a range of `starts`, in edge order.
+    let mut starts: Vec<(u32, u32)> = edges
+        .iter()
+        .enumerate()
+        .map(|(e, &(a, _))| (a, e as u32))
+        .collect();
+    starts.sort_unstable();
     let mut used = vec![false; edges.len()];
     let mut loops = Vec::new();
     for start in 0..edges.len() {
@@ -442,21 +461,15 @@ fn boundary_loops(mesh: &Mesh, positions: &[[f64; 2]]) -> Vec<Vec<[f64; 2]>> {
         loop {
             used[e] = true;
             let (a, b) = edges[e];
-            points.push(positions[a as usize]);
-            let next = outgoing.get_mut(&b).and_then(|list| {
-                while let Some(&candidate) = list.last() {
-                    if used[candidate] {
-                        list.pop();
-                    } else {
-                        return Some(candidate);
-                    }
-                }
-                None
-            });
+            points.push(a);
+            let from = starts.partition_point(|&(v, _)| v < b);
+            let next = starts[from..]
+                .iter()
+                .take_while(|&&(v, _)| v == b)
+                .map(|&(_, e)| e as usize)
+                .find(|&e| !used[e]);
             match next {
                 Some(n) => e = n,
-                // Back at the start (its edge is used), or an open chain, which a mesh from
-                // `march` cannot produce: either way the loop ends here.
                 None => break,
             }
         }

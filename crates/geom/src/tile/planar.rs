@@ -36,14 +36,12 @@
 //!   parts of the surface, closer than `h`, is not detected.)
 //! - Everything is a pure function of the arguments: identical for any thread count.
 
-use rayon::prelude::*;
-
 use super::lattice::Lattice;
 use super::square::SquareLattice;
 use super::triangle::TriangleLattice;
 use super::weld::Corners;
 use super::{ElementMap, TileError, TileStats, TiledSolid, check_input, tile_on};
-use crate::contour2d::Element2;
+use crate::contour2d::{Element2, boundary_loops};
 use crate::mesh::Mesh;
 use crate::scaffold::{ElementKind, Scaffold};
 
@@ -285,76 +283,6 @@ fn region_of(mesh: Mesh, stats: TileStats, planar: bool) -> TiledRegion {
         planar,
         stats,
     }
-}
-
-/// Chains the edges used by one triangle into closed loops, directed as in their triangle.
-/// Loops start at the earliest boundary edge in triangle order; at a vertex with several
-/// outgoing boundary edges (where the region touches itself) the earliest unused is taken, so
-/// the result is deterministic and every loop is closed. Edges are matched by sorting their
-/// undirected keys (no hashing: this runs over tens of millions of edges).
-fn boundary_loops(mesh: &Mesh) -> Vec<Vec<u32>> {
-    let directed = |slot: usize| {
-        let t = mesh.triangles[slot / 3];
-        (t[slot % 3], t[(slot % 3 + 1) % 3])
-    };
-    let mut keys: Vec<(u64, u32)> = (0..mesh.triangles.len() * 3)
-        .into_par_iter()
-        .map(|slot| {
-            let (a, b) = directed(slot);
-            (u64::from(a.min(b)) << 32 | u64::from(a.max(b)), slot as u32)
-        })
-        .collect();
-    keys.par_sort_unstable();
-    // Keys used once are boundary edges (twice: interior, in opposite directions on an
-    // edge-manifold region); in triangle order.
-    let mut slots: Vec<u32> = Vec::new();
-    let mut i = 0;
-    while i < keys.len() {
-        let mut j = i + 1;
-        while j < keys.len() && keys[j].0 == keys[i].0 {
-            j += 1;
-        }
-        if j - i == 1 {
-            slots.push(keys[i].1);
-        }
-        i = j;
-    }
-    drop(keys);
-    slots.sort_unstable();
-    let edges: Vec<(u32, u32)> = slots.iter().map(|&s| directed(s as usize)).collect();
-    // Outgoing edges of each vertex: a range of `starts`, in edge order.
-    let mut starts: Vec<(u32, u32)> = edges
-        .iter()
-        .enumerate()
-        .map(|(e, &(a, _))| (a, e as u32))
-        .collect();
-    starts.sort_unstable();
-    let mut used = vec![false; edges.len()];
-    let mut loops = Vec::new();
-    for start in 0..edges.len() {
-        if used[start] {
-            continue;
-        }
-        let mut points = Vec::new();
-        let mut e = start;
-        loop {
-            used[e] = true;
-            let (a, b) = edges[e];
-            points.push(a);
-            let from = starts.partition_point(|&(v, _)| v < b);
-            let next = starts[from..]
-                .iter()
-                .take_while(|&&(v, _)| v == b)
-                .map(|&(_, e)| e as usize)
-                .find(|&e| !used[e]);
-            match next {
-                Some(n) => e = n,
-                None => break,
-            }
-        }
-        loops.push(points);
-    }
-    loops
 }
 
 fn check_length(what: &'static str, value: f64) -> Result<(), RegionError> {
