@@ -15,3 +15,166 @@ impl Mesh {
         self.triangles.is_empty()
     }
 }
+
+/// One piece of a mesh that is produced, checked and written in order, so a mesh of any size
+/// passes through memory a chunk at a time (tiling a large scaffold, `tile::stream`).
+///
+/// Invariants, for the chunks of one mesh taken in order:
+/// - chunk `k` adds the vertices `first_vertex .. first_vertex + vertices.len()`, and
+///   `first_vertex` is the previous chunk's end (0 for the first chunk): ids are dense;
+/// - its triangles use ids of its own vertices or of earlier chunks' (never a later one), and
+///   `borrowed` lists every earlier id they use, once, sorted by id, with its position (bitwise
+///   the one its own chunk gave it);
+/// - `open` lists, sorted, every id of this or an earlier chunk that a triangle of a *later*
+///   chunk uses; an id missing from it is finished: no later triangle touches it. The last
+///   chunk's `open` is empty.
+///
+/// Concatenating the chunks' vertices and triangles gives the whole mesh.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MeshChunk {
+    pub first_vertex: u32,
+    pub vertices: Vec<[f32; 3]>,
+    pub triangles: Vec<[u32; 3]>,
+    pub borrowed: Vec<(u32, [f32; 3])>,
+    pub open: Vec<u32>,
+}
+
+impl MeshChunk {
+    /// The id one past this chunk's last vertex (the next chunk's `first_vertex`).
+    pub fn end_vertex(&self) -> u32 {
+        self.first_vertex + self.vertices.len() as u32
+    }
+
+    /// The position of vertex `id`, which is this chunk's own or one it borrows.
+    pub fn position(&self, id: u32) -> Option<[f32; 3]> {
+        if id >= self.first_vertex {
+            return self
+                .vertices
+                .get((id - self.first_vertex) as usize)
+                .copied();
+        }
+        self.borrowed
+            .binary_search_by_key(&id, |&(i, _)| i)
+            .ok()
+            .map(|k| self.borrowed[k].1)
+    }
+
+    /// Cuts a whole mesh into chunks of about `triangles_per_chunk` triangles that satisfy the
+    /// invariants above (for tests and for meshes that were made whole).
+    pub fn split(mesh: &Mesh, triangles_per_chunk: usize) -> Vec<MeshChunk> {
+        let per = triangles_per_chunk.max(1);
+        let n = mesh.vertices.len();
+        // A vertex belongs to the chunk of the first triangle that uses it, and is open until
+        // the chunk of the last one; unreferenced vertices go with the chunk where their id
+        // falls between referenced ones, so ids stay dense and increasing.
+        let mut first_use = vec![usize::MAX; n];
+        let mut last_use = vec![0usize; n];
+        for (t, tri) in mesh.triangles.iter().enumerate() {
+            for &v in tri {
+                let v = v as usize;
+                if v < n {
+                    first_use[v] = first_use[v].min(t / per);
+                    last_use[v] = last_use[v].max(t / per);
+                }
+            }
+        }
+        // Ids must grow with the chunk, and a chunk may only use ids of its own or earlier
+        // chunks: vertex v goes to the earliest chunk that uses v or any later id.
+        let chunks = mesh.triangles.len().div_ceil(per).max(1);
+        let mut owner = vec![0usize; n];
+        let mut suffix_min = chunks - 1;
+        for v in (0..n).rev() {
+            suffix_min = suffix_min.min(first_use[v]);
+            owner[v] = suffix_min;
+        }
+        let mut out: Vec<MeshChunk> = (0..chunks).map(|_| MeshChunk::default()).collect();
+        for v in 0..n {
+            out[owner[v]].vertices.push(mesh.vertices[v]);
+        }
+        let mut next = 0u32;
+        for chunk in &mut out {
+            chunk.first_vertex = next;
+            next = chunk.end_vertex();
+        }
+        for (t, tri) in mesh.triangles.iter().enumerate() {
+            out[t / per].triangles.push(*tri);
+        }
+        for chunk in &mut out {
+            let mut borrowed: Vec<u32> = chunk
+                .triangles
+                .iter()
+                .flatten()
+                .copied()
+                .filter(|&v| v < chunk.first_vertex)
+                .collect();
+            borrowed.sort_unstable();
+            borrowed.dedup();
+            chunk.borrowed = borrowed
+                .into_iter()
+                .map(|v| (v, mesh.vertices[v as usize]))
+                .collect();
+        }
+        for v in 0..n {
+            if first_use[v] != usize::MAX {
+                for chunk in &mut out[owner[v]..last_use[v]] {
+                    chunk.open.push(v as u32);
+                }
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A strip of `n` quads, numbered so that later triangles reuse early vertices.
+    fn strip(n: u32) -> Mesh {
+        let mut mesh = Mesh::default();
+        for i in 0..=n {
+            mesh.vertices.push([i as f32, 0.0, 0.0]);
+            mesh.vertices.push([i as f32, 1.0, 0.0]);
+        }
+        for i in 0..n {
+            let (a, b, c, d) = (2 * i, 2 * i + 2, 2 * i + 3, 2 * i + 1);
+            mesh.triangles.push([a, b, c]);
+            mesh.triangles.push([a, c, d]);
+        }
+        // A triangle back to the start, so vertex 0 stays open to the end.
+        mesh.triangles.push([0, 2 * n, 1]);
+        mesh
+    }
+
+    #[test]
+    fn split_chunks_keep_the_invariants_and_concatenate_to_the_mesh() {
+        let mesh = strip(10);
+        for per in [1, 3, 7, 100] {
+            let chunks = MeshChunk::split(&mesh, per);
+            let mut whole = Mesh::default();
+            let mut next = 0;
+            for (k, chunk) in chunks.iter().enumerate() {
+                assert_eq!(chunk.first_vertex, next);
+                next = chunk.end_vertex();
+                for t in &chunk.triangles {
+                    for &v in t {
+                        assert!(v < chunk.end_vertex(), "a later id {v}");
+                        assert_eq!(chunk.position(v), Some(mesh.vertices[v as usize]));
+                    }
+                }
+                // Open: used by a later chunk's triangle, and nothing else.
+                let later: std::collections::BTreeSet<u32> = chunks[k + 1..]
+                    .iter()
+                    .flat_map(|c| c.triangles.iter().flatten().copied())
+                    .filter(|&v| v < chunk.end_vertex())
+                    .collect();
+                assert_eq!(chunk.open, later.into_iter().collect::<Vec<_>>());
+                whole.vertices.extend(&chunk.vertices);
+                whole.triangles.extend(&chunk.triangles);
+            }
+            assert_eq!(whole, mesh);
+            assert!(chunks.last().is_some_and(|c| c.open.is_empty()));
+            assert!(chunks.len() > 1 || per >= mesh.triangles.len());
+        }
+    }
+}
