@@ -3,10 +3,14 @@
 //!
 //! `cargo run --release -p latticebuild-geom --example tile_bench -- 100000 12`
 //! `cargo run --release -p latticebuild-geom --example tile_bench -- bracket.msh 12`
+//!
+//! With `stream` as a third argument the mesh is streamed in chunks of about 4M triangles
+//! (`tile::stream_scaffold`) and dropped chunk by chunk: peak memory is then what tiling holds,
+//! not the mesh.
 
 use latticebuild_geom::field::{ScalarField, Solid};
 use latticebuild_geom::scaffold::{ElementKind, Scaffold, grid, read_scaffold};
-use latticebuild_geom::tile::{TiledSolid, tile_scaffold};
+use latticebuild_geom::tile::{TiledSolid, chunk_elements_for, stream_scaffold, tile_scaffold};
 use std::time::Instant;
 
 struct SchwarzP;
@@ -51,6 +55,34 @@ fn tile_file(path: &str, resolution: usize) {
 fn report(what: &str, scaffold: &Scaffold, resolution: usize, read: f64) {
     let solid = TiledSolid::of(&SchwarzP, Solid::Inside { offset: 0.0 });
     let start = Instant::now();
+    if std::env::args().nth(3).as_deref() == Some("stream") {
+        let per_chunk = chunk_elements_for(
+            resolution,
+            std::env::var("CHUNK_TRIANGLES")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(4_000_000),
+        );
+        let (mut triangles, mut vertices, mut chunks, mut open) = (0usize, 0usize, 0usize, 0usize);
+        let result = stream_scaffold(scaffold, &solid, None, resolution, per_chunk, &mut |c| {
+            triangles += c.triangles.len();
+            vertices += c.vertices.len();
+            chunks += 1;
+            open = open.max(c.open.len());
+            Ok(())
+        });
+        let seconds = start.elapsed().as_secs_f64();
+        match result {
+            Ok(stats) => println!(
+                "{what}: {} {} elements (read in {read:.2} s), resolution {resolution}, streamed in {chunks} chunks of {per_chunk} elements (at most {open} vertices open): {triangles} triangles, {vertices} vertices in {seconds:.3} s = {:.2} M triangles/s",
+                stats.elements,
+                scaffold.kind.name(),
+                triangles as f64 / seconds / 1e6
+            ),
+            Err(e) => eprintln!("tiling failed: {e}"),
+        }
+        return;
+    }
     match tile_scaffold(scaffold, &solid, resolution) {
         Ok((mesh, stats)) => {
             let seconds = start.elapsed().as_secs_f64();

@@ -25,9 +25,10 @@ impl Mesh {
 /// - its triangles use ids of its own vertices or of earlier chunks' (never a later one), and
 ///   `borrowed` lists every earlier id they use, once, sorted by id, with its position (bitwise
 ///   the one its own chunk gave it);
-/// - `open` lists, sorted, every id of this or an earlier chunk that a triangle of a *later*
-///   chunk uses; an id missing from it is finished: no later triangle touches it. The last
-///   chunk's `open` is empty.
+/// - `open` lists, sorted and once each, the ids of this or earlier chunks that a triangle of a
+///   *later* chunk may use: every id a later triangle uses is in it (it may hold a few more
+///   that no later triangle ends up using — a producer may not know yet). An id missing from
+///   it is finished: no later triangle touches it. The last chunk's `open` is empty.
 ///
 /// Concatenating the chunks' vertices and triangles gives the whole mesh.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -21,6 +21,10 @@
 //!    shared vertex places it (`X_e` of its own reference point), so the output does not
 //!    depend on the thread count.
 //! 4. **Caps** are kept on scaffold boundary faces (faces used by one element) only.
+//! 5. **Streaming.** Elements are taken in a Morton order of their centroids (`scaffold.rs`)
+//!    and welded a chunk at a time ([`stream_scaffold`], `weld::Welder`): memory holds one
+//!    chunk's local meshes and output, and the vertices later chunks may still use. The
+//!    chunks of any size concatenate to the one-chunk mesh bit for bit.
 //!
 //! 2D scaffolds (tri, quad) are tiled by the same steps into a planar or surface region, see
 //! `planar.rs` ([`tile_surface_scaffold`]); choose by `ElementKind::dimension()`.
@@ -45,9 +49,9 @@ use rayon::prelude::*;
 
 use crate::element::Element3;
 use crate::field::{ScalarField, Solid};
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, MeshChunk};
 use lattice::{Lattice, Weights};
-use weld::{Corners, Locals, weld};
+use weld::{Corners, Locals, Welder};
 
 pub use cube::HEX_CORNERS;
 pub use planar::{
@@ -55,7 +59,7 @@ pub use planar::{
     thickness_normal, tile_planar, tile_surface_scaffold,
 };
 pub use scaffold::{reference_element, tile_scaffold};
-pub use skin::{Skin, tile_scaffold_with_skin};
+pub use skin::{Skin, stream_scaffold, tile_scaffold_with_skin};
 
 /// The isoparametric maps of a scaffold's elements.
 pub trait ElementMap: Sync {
@@ -121,6 +125,9 @@ pub enum TileError {
     TooManyVertices(u64),
     #[error("skin: {0}")]
     Skin(String),
+    /// What the receiver of a streamed tiling's chunks reported.
+    #[error("{0}")]
+    Sink(String),
 }
 
 /// What is tiled into every element: a cell (or a transition between two), in reference
@@ -193,11 +200,40 @@ fn tile_with(
     resolution: usize,
 ) -> Result<(Mesh, TileStats), TileError> {
     check_input(elements.corners, elements.corner_count(), solid, resolution)?;
-    let lattice: Box<dyn Lattice> = match elements.shape {
+    tile_on(
+        elements,
+        lattice_of(elements.shape, resolution).as_ref(),
+        solid,
+        skin,
+    )
+}
+
+/// [`tile_with`], handing the mesh to `sink` a chunk of `chunk_elements` elements at a time.
+fn stream_with(
+    elements: &Elements,
+    solid: &TiledSolid,
+    skin: Option<&Skin>,
+    resolution: usize,
+    chunk_elements: usize,
+    sink: &mut ChunkSink,
+) -> Result<TileStats, TileError> {
+    check_input(elements.corners, elements.corner_count(), solid, resolution)?;
+    let lattice = lattice_of(elements.shape, resolution);
+    stream_on(
+        elements,
+        lattice.as_ref(),
+        solid,
+        skin,
+        chunk_elements,
+        sink,
+    )
+}
+
+fn lattice_of(shape: Element3, resolution: usize) -> Box<dyn Lattice> {
+    match shape {
         Element3::Cube => Box::new(cube::CubeLattice::new(resolution)),
         Element3::Tetrahedron => Box::new(simplex::TetLattice::new(resolution)),
-    };
-    tile_on(elements, lattice.as_ref(), solid, skin)
+    }
 }
 
 /// The checks every tiling makes before it starts: the resolution, the corner list's length,
@@ -234,31 +270,74 @@ fn check_input(
 }
 
 /// Samples, contours and welds `solid` over `elements` on `lattice` (steps 1–4 of the module
-/// docs), whatever the element's dimension.
+/// docs), whatever the element's dimension, as one mesh.
 fn tile_on(
     elements: &dyn Corners,
     lattice: &dyn Lattice,
     solid: &TiledSolid,
     skin: Option<&Skin>,
 ) -> Result<(Mesh, TileStats), TileError> {
+    let mut mesh = Mesh::default();
+    let stats = stream_on(elements, lattice, solid, skin, usize::MAX, &mut |chunk| {
+        // One chunk holds every element: its arrays are the mesh.
+        mesh.vertices = chunk.vertices;
+        mesh.triangles = chunk.triangles;
+        Ok(())
+    })?;
+    Ok((mesh, stats))
+}
+
+/// Where a streamed tiling's chunks go, in order; an error stops the tiling.
+pub type ChunkSink<'s> = dyn FnMut(MeshChunk) -> Result<(), String> + 's;
+
+/// [`tile_on`], handing the mesh to `sink` a chunk of `chunk_elements` elements at a time (at
+/// least one chunk, even for no elements): memory holds one chunk's local meshes and output,
+/// and the vertices open between chunks.
+fn stream_on(
+    elements: &dyn Corners,
+    lattice: &dyn Lattice,
+    solid: &TiledSolid,
+    skin: Option<&Skin>,
+    chunk_elements: usize,
+    sink: &mut ChunkSink,
+) -> Result<TileStats, TileError> {
+    let count = elements.count();
+    let per_chunk = chunk_elements.clamp(1, count.max(1));
+    let chunks = count.div_ceil(per_chunk).max(1);
+    let mut welder = Welder::new(elements, lattice, chunks > 1)?;
     let cell = symmetric_samples(lattice, solid.cell);
+    let mut emit = |chunk: MeshChunk| sink(chunk).map_err(TileError::Sink);
     if solid.is_uniform() && skin.is_none() {
         let values: Vec<f64> = cell.iter().map(|&v| solid.solid.apply(v)).collect();
         let local = lattice.contour(&values);
-        return weld(elements, lattice, Locals::Uniform(&local));
+        for _ in 0..chunks {
+            emit(welder.chunk(per_chunk, Locals::Uniform(&local))?)?;
+        }
+        return Ok(welder.stats());
     }
     let samples = ElementSamples::new(lattice, solid, cell).with_skin(skin);
-    let locals: Vec<local::LocalMesh> = (0..elements.count())
-        .into_par_iter()
-        .map_init(
-            || vec![f64::NAN; lattice.index_len()],
-            |values, e| {
-                samples.fill(elements.element(e), values);
-                lattice.contour(values)
-            },
-        )
-        .collect();
-    weld(elements, lattice, Locals::PerElement(&locals))
+    for k in 0..chunks {
+        let range = k * per_chunk..((k + 1) * per_chunk).min(count);
+        let locals: Vec<local::LocalMesh> = range
+            .into_par_iter()
+            .map_init(
+                || vec![f64::NAN; lattice.index_len()],
+                |values, e| {
+                    samples.fill(elements.element(e), values);
+                    lattice.contour(values)
+                },
+            )
+            .collect();
+        emit(welder.chunk(per_chunk, Locals::PerElement(&locals))?)?;
+    }
+    Ok(welder.stats())
+}
+
+/// Elements per chunk for about `triangles` output triangles per chunk at `resolution`
+/// samples per element edge (a lattice surface crosses an element in about `2 r²` triangles).
+pub fn chunk_elements_for(resolution: usize, triangles: usize) -> usize {
+    let per_element = 2 * resolution.max(2).pow(2);
+    (triangles / per_element).max(64)
 }
 
 /// The samples of a graded or transition solid in one element, from the symmetric reference
@@ -389,3 +468,6 @@ fn symmetric_samples(lattice: &dyn Lattice, field: &dyn ScalarField) -> Vec<f64>
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod stream_tests;

@@ -30,24 +30,111 @@ pub fn tile_scaffold(
     solid: &TiledSolid,
     resolution: usize,
 ) -> Result<(Mesh, TileStats), TileError> {
-    let (shape, corners) = corners(scaffold)?;
-    let elements = Elements {
-        shape,
-        corners: &corners,
-        map: scaffold,
-    };
-    tile(&elements, solid, resolution)
+    let ordered = Ordered::new(scaffold)?;
+    tile(&ordered.elements(), solid, resolution)
 }
 
-/// The reference shape of a volume scaffold and its elements' corner nodes, element by element.
-pub(super) fn corners(scaffold: &Scaffold) -> Result<(Element3, Vec<u32>), TileError> {
-    let shape =
-        reference_element(scaffold.kind).ok_or(TileError::NotVolume(scaffold.kind.name()))?;
-    let (per, corners_per) = (scaffold.kind.node_count(), scaffold.kind.corner_count());
-    let corners: Vec<u32> = scaffold
-        .connectivity
-        .chunks_exact(per)
-        .flat_map(|element| element[..corners_per].iter().copied())
+/// A volume scaffold's elements in the order they are tiled: along a Morton (Z-order) curve
+/// through their corner centroids, so that consecutive elements — and a streamed tiling's
+/// chunks — are compact in space and few vertices stay open between chunks. (In Gmsh's own
+/// order about 9 % of a 100k-tet bracket's output vertices stayed open at once.) The output's
+/// numbering follows this order; it depends only on the scaffold.
+pub(super) struct Ordered<'s> {
+    scaffold: &'s Scaffold,
+    shape: Element3,
+    /// Tiling position → element index in the scaffold.
+    order: Vec<u32>,
+    /// Corner nodes, element by element in tiling order.
+    corners: Vec<u32>,
+}
+
+impl<'s> Ordered<'s> {
+    pub(super) fn new(scaffold: &'s Scaffold) -> Result<Ordered<'s>, TileError> {
+        let shape =
+            reference_element(scaffold.kind).ok_or(TileError::NotVolume(scaffold.kind.name()))?;
+        let corners_per = scaffold.kind.corner_count();
+        let order = morton_order(scaffold, corners_per);
+        let corners = order
+            .iter()
+            .flat_map(|&e| scaffold.element(e as usize)[..corners_per].iter().copied())
+            .collect();
+        Ok(Ordered {
+            scaffold,
+            shape,
+            order,
+            corners,
+        })
+    }
+
+    pub(super) fn elements(&self) -> Elements<'_> {
+        Elements {
+            shape: self.shape,
+            corners: &self.corners,
+            map: self,
+        }
+    }
+}
+
+impl ElementMap for Ordered<'_> {
+    fn map(&self, element: usize, xi: [f64; 3]) -> [f64; 3] {
+        Scaffold::map(self.scaffold, self.order[element] as usize, xi)
+    }
+}
+
+/// Element indices sorted by the Morton code of their corner centroid in the scaffold's
+/// bounding box (21 bits per axis); ties keep file order.
+fn morton_order(scaffold: &Scaffold, corners_per: usize) -> Vec<u32> {
+    let count = scaffold.element_count();
+    let centroid = |e: usize| {
+        let mut c = [0.0; 3];
+        for &n in &scaffold.element(e)[..corners_per] {
+            let p = scaffold.nodes.get(n as usize).copied().unwrap_or([0.0; 3]);
+            for a in 0..3 {
+                c[a] += p[a];
+            }
+        }
+        c.map(|v| v / corners_per as f64)
+    };
+    let centroids: Vec<[f64; 3]> = (0..count).map(centroid).collect();
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for c in &centroids {
+        for a in 0..3 {
+            lo[a] = lo[a].min(c[a]);
+            hi[a] = hi[a].max(c[a]);
+        }
+    }
+    let cells = f64::from((1u32 << 21) - 1);
+    let mut keyed: Vec<(u64, u32)> = centroids
+        .iter()
+        .enumerate()
+        .map(|(e, c)| {
+            let cell = |a: usize| {
+                let span = hi[a] - lo[a];
+                let t = if span > 0.0 {
+                    (c[a] - lo[a]) / span
+                } else {
+                    0.0
+                };
+                // NaN (a broken node) sorts first: `as` saturates it to 0.
+                (t * cells) as u64
+            };
+            (
+                spread(cell(0)) | spread(cell(1)) << 1 | spread(cell(2)) << 2,
+                e as u32,
+            )
+        })
         .collect();
-    Ok((shape, corners))
+    keyed.sort_unstable();
+    keyed.into_iter().map(|(_, e)| e).collect()
+}
+
+/// The low 21 bits of `x`, spread to every third bit.
+fn spread(x: u64) -> u64 {
+    let mut x = x & 0x1f_ffff;
+    x = (x | x << 32) & 0x1f_0000_0000_ffff;
+    x = (x | x << 16) & 0x1f_0000_ff00_00ff;
+    x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
+    x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
+    x = (x | x << 2) & 0x1249_2492_4924_9249;
+    x
 }

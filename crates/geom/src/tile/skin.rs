@@ -27,7 +27,8 @@ use crate::mesh_sdf::{MeshSdf, SdfOptions};
 use crate::scaffold::Scaffold;
 
 use super::lattice::{MAX_CORNERS, Weights};
-use super::{Elements, TileError, TileStats, TiledSolid, tile_with};
+use super::scaffold::Ordered;
+use super::{ChunkSink, TileError, TileStats, TiledSolid, stream_with, tile_with};
 
 /// The skin term of one scaffold: distances to its boundary faces, and the band it matters in.
 pub struct Skin {
@@ -174,12 +175,34 @@ pub fn tile_scaffold_with_skin(
     let Some(thickness) = skin else {
         return super::tile_scaffold(scaffold, solid, resolution);
     };
-    let (shape, corners) = super::scaffold::corners(scaffold)?;
+    let ordered = Ordered::new(scaffold)?;
     let skin = Skin::new(scaffold, thickness, resolution)?;
-    let elements = Elements {
-        shape,
-        corners: &corners,
-        map: scaffold,
-    };
-    tile_with(&elements, solid, Some(&skin), resolution)
+    tile_with(&ordered.elements(), solid, Some(&skin), resolution)
+}
+
+/// [`tile_scaffold_with_skin`], handing the mesh to `sink` a chunk of `chunk_elements` elements
+/// at a time, in element order ([`crate::mesh::MeshChunk`]; see
+/// [`super::chunk_elements_for`]). The chunks concatenate to the mesh
+/// [`tile_scaffold_with_skin`] makes, bit for bit, whatever the chunk size.
+pub fn stream_scaffold(
+    scaffold: &Scaffold,
+    solid: &TiledSolid,
+    skin: Option<f64>,
+    resolution: usize,
+    chunk_elements: usize,
+    sink: &mut ChunkSink,
+) -> Result<TileStats, TileError> {
+    let ordered = Ordered::new(scaffold)?;
+    let skin = skin
+        .map(|t| Skin::new(scaffold, t, resolution))
+        .transpose()?;
+    let elements = ordered.elements();
+    stream_with(
+        &elements,
+        solid,
+        skin.as_ref(),
+        resolution,
+        chunk_elements,
+        sink,
+    )
 }

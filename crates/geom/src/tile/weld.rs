@@ -4,9 +4,12 @@
 //! Invariants: a boundary vertex's name depends only on global node ids and lattice weights,
 //! never on the element's frame; the lowest element using a vertex places and numbers it;
 //! ids are assigned element by element in local order, so the mesh does not depend on the
-//! thread count.
+//! thread count — nor on how the elements are cut into chunks: a vertex a later chunk uses is
+//! kept open (with its id and position) until the last element containing its node, edge or
+//! face has been welded, and a chunk that meets it again borrows it.
 
 use rayon::prelude::*;
+use std::collections::HashMap;
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use super::lattice::{Lattice, Weights};
@@ -35,7 +38,7 @@ impl Corners for Elements<'_> {
         self.map.map(e, xi)
     }
 }
-use crate::mesh::Mesh;
+use crate::mesh::MeshChunk;
 
 /// A local vertex on the element boundary: the weights of its lattice ends, and the faces
 /// whose caps alone use it (0 when surface triangles use it).
@@ -45,72 +48,173 @@ struct SharedVertex {
     caps: u8,
 }
 
-/// What an element does with one of its shared vertices.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Role {
-    /// Only caps on interior faces use it: it is not in the output.
-    Unused,
-    /// The lowest element using it: it places and numbers it.
-    Owner,
-    /// Another element owns it.
-    Borrower,
+/// The scaffold's faces as the elements see them: which lie on the boundary (one bit per face
+/// and element) and, for an interior face, the element on its other side.
+struct FaceTable {
+    boundary: Vec<u8>,
+    /// Per `(element, face)`: the other element sharing the face, or [`NONE`].
+    neighbour: Vec<u32>,
+    stats: TileStats,
 }
 
-/// Which faces of each element lie on the scaffold boundary (one bit per face).
-fn boundary_faces(
-    elements: &dyn Corners,
-    face_masks: &[u8],
-) -> Result<(Vec<u8>, TileStats), TileError> {
-    let n = elements.count();
-    let mut faces: Vec<([u32; 4], u32)> = (0..n)
-        .into_par_iter()
-        .flat_map_iter(|e| {
-            let corners = elements.element(e);
-            face_masks.iter().enumerate().map(move |(f, &mask)| {
-                let mut nodes = [u32::MAX; 4];
-                let on_face = (0..corners.len()).filter(|c| mask & 1 << c != 0);
-                for (slot, c) in nodes.iter_mut().zip(on_face) {
-                    *slot = corners[c];
-                }
-                nodes.sort_unstable();
-                (nodes, (e * face_masks.len() + f) as u32)
+impl FaceTable {
+    fn new(elements: &dyn Corners, face_masks: &[u8]) -> Result<FaceTable, TileError> {
+        let n = elements.count();
+        let per = face_masks.len();
+        let mut faces: Vec<([u32; 4], u32)> = (0..n)
+            .into_par_iter()
+            .flat_map_iter(|e| {
+                let corners = elements.element(e);
+                face_masks.iter().enumerate().map(move |(f, &mask)| {
+                    let mut nodes = [u32::MAX; 4];
+                    let on_face = (0..corners.len()).filter(|c| mask & 1 << c != 0);
+                    for (slot, c) in nodes.iter_mut().zip(on_face) {
+                        *slot = corners[c];
+                    }
+                    nodes.sort_unstable();
+                    (nodes, (e * per + f) as u32)
+                })
             })
-        })
-        .collect();
-    faces.par_sort_unstable();
-    let mut boundary = vec![0u8; n];
-    let mut stats = TileStats {
-        elements: n,
-        ..TileStats::default()
-    };
-    let mut i = 0;
-    while i < faces.len() {
-        let mut j = i + 1;
-        while j < faces.len() && faces[j].0 == faces[i].0 {
-            j += 1;
-        }
-        match j - i {
-            1 => {
-                let slot = faces[i].1 as usize;
-                boundary[slot / face_masks.len()] |= 1 << (slot % face_masks.len());
-                stats.boundary_faces += 1;
+            .collect();
+        faces.par_sort_unstable();
+        let mut table = FaceTable {
+            boundary: vec![0u8; n],
+            neighbour: vec![NONE; n * per],
+            stats: TileStats {
+                elements: n,
+                ..TileStats::default()
+            },
+        };
+        let mut i = 0;
+        while i < faces.len() {
+            let mut j = i + 1;
+            while j < faces.len() && faces[j].0 == faces[i].0 {
+                j += 1;
             }
-            2 => stats.interior_faces += 1,
-            count => {
-                return Err(TileError::NonConforming {
-                    nodes: faces[i]
-                        .0
-                        .iter()
-                        .copied()
-                        .filter(|&v| v != u32::MAX)
-                        .collect(),
-                    count,
-                });
+            match j - i {
+                1 => {
+                    let slot = faces[i].1 as usize;
+                    table.boundary[slot / per] |= 1 << (slot % per);
+                    table.stats.boundary_faces += 1;
+                }
+                2 => {
+                    let (a, b) = (faces[i].1 as usize, faces[i + 1].1 as usize);
+                    table.neighbour[a] = (b / per) as u32;
+                    table.neighbour[b] = (a / per) as u32;
+                    table.stats.interior_faces += 1;
+                }
+                count => {
+                    return Err(TileError::NonConforming {
+                        nodes: faces[i]
+                            .0
+                            .iter()
+                            .copied()
+                            .filter(|&v| v != u32::MAX)
+                            .collect(),
+                        count,
+                    });
+                }
             }
+            i = j;
         }
-        i = j;
+        Ok(table)
     }
-    Ok((boundary, stats))
+}
+
+/// The last element (highest index) that contains each corner set a boundary vertex can lie
+/// on — a scaffold node, edge or face — so a chunk knows which of its vertices later chunks
+/// may still use. Which one a vertex lies on follows from its corner mask: one corner is a
+/// node; a mask inside exactly one face is on that face (whose elements are this one and its
+/// neighbour); a mask inside two or more faces is an element edge (3D).
+struct LastUsers {
+    node: Vec<u32>,
+    /// Sorted `(lo << 32 | hi, last element)` over the scaffold's element edges.
+    edges: Vec<(u64, u32)>,
+}
+
+impl LastUsers {
+    fn new(elements: &dyn Corners, face_masks: &[u8]) -> LastUsers {
+        let n = elements.count();
+        let mut node = Vec::new();
+        for e in 0..n {
+            for &c in elements.element(e) {
+                let c = c as usize;
+                if c >= node.len() {
+                    node.resize(c + 1, 0);
+                }
+                node[c] = e as u32;
+            }
+        }
+        let local_edges = element_edges(face_masks);
+        let mut edges: Vec<(u64, u32)> = (0..n)
+            .into_par_iter()
+            .flat_map_iter(|e| {
+                let corners = elements.element(e);
+                local_edges
+                    .iter()
+                    .map(move |&(i, j)| (edge_key(corners[i], corners[j]), e as u32))
+            })
+            .collect();
+        edges.par_sort_unstable();
+        // Sorted by (key, element): the last of each run is the edge's last element.
+        let mut last: Vec<(u64, u32)> = Vec::with_capacity(edges.len() / 2);
+        for (key, e) in edges {
+            match last.last_mut() {
+                Some(l) if l.0 == key => l.1 = e,
+                _ => last.push((key, e)),
+            }
+        }
+        LastUsers { node, edges: last }
+    }
+
+    /// The last element containing the corners `mask` of element `e` (corner nodes `corners`).
+    fn of(&self, e: usize, corners: &[u32], mask: u8, faces: &FaceTable, face_masks: &[u8]) -> u32 {
+        let e32 = e as u32;
+        if mask.count_ones() == 1 {
+            return self.node[corners[mask.trailing_zeros() as usize] as usize];
+        }
+        let mut containing = face_masks
+            .iter()
+            .enumerate()
+            .filter(|&(_, &f)| mask & !f == 0);
+        match (containing.next(), containing.next()) {
+            (Some((f, _)), None) => {
+                let other = faces.neighbour[e * face_masks.len() + f];
+                if other == NONE { e32 } else { e32.max(other) }
+            }
+            (Some(_), Some(_)) => {
+                let (i, j) = (mask.trailing_zeros(), 7 - mask.leading_zeros());
+                let key = edge_key(corners[i as usize], corners[j as usize]);
+                self.edges
+                    .binary_search_by_key(&key, |&(k, _)| k)
+                    .map_or(e32, |k| self.edges[k].1)
+            }
+            // Not on the element's boundary: only this element uses it.
+            (None, _) => e32,
+        }
+    }
+}
+
+/// The corner pairs of an element that lie in two or more faces: its edges (3D elements; a 2D
+/// element's edges are its faces).
+fn element_edges(face_masks: &[u8]) -> Vec<(usize, usize)> {
+    let corners = face_masks.iter().fold(0u8, |m, &f| m | f);
+    let mut edges = Vec::new();
+    for i in 0..8 {
+        for j in i + 1..8 {
+            let pair = 1u8 << i | 1 << j;
+            if corners & pair == pair
+                && face_masks.iter().filter(|&&f| f & pair == pair).count() >= 2
+            {
+                edges.push((i, j));
+            }
+        }
+    }
+    edges
+}
+
+fn edge_key(a: u32, b: u32) -> u64 {
+    u64::from(a.min(b)) << 32 | u64::from(a.max(b))
 }
 
 /// 128-bit name of a shared vertex in element `corners`: its ends' `(global node, weight)`
@@ -170,17 +274,19 @@ impl Hasher128 {
     }
 }
 
-/// The local mesh of each element: one for all (a uniform cell) or one each.
+/// The local mesh of each element of a chunk: one for all (a uniform cell) or one each, in
+/// the chunk's element order.
 pub enum Locals<'a> {
     Uniform(&'a LocalMesh),
     PerElement(&'a [LocalMesh]),
 }
 
 impl Locals<'_> {
-    fn get(&self, e: usize) -> &LocalMesh {
+    /// The local mesh of the chunk's `i`-th element.
+    fn get(&self, i: usize) -> &LocalMesh {
         match self {
             Locals::Uniform(local) => local,
-            Locals::PerElement(all) => &all[e],
+            Locals::PerElement(all) => &all[i],
         }
     }
 }
@@ -242,165 +348,324 @@ impl Classified {
     }
 }
 
-/// Welds the elements' local meshes into one mesh (see the module docs, step 3).
-pub fn weld(
-    elements: &dyn Corners,
-    lattice: &dyn Lattice,
-    locals: Locals,
-) -> Result<(Mesh, TileStats), TileError> {
-    let (boundary, stats) = boundary_faces(elements, lattice.face_masks())?;
-    let n = elements.count();
-    let classified: Vec<Classified> = match &locals {
-        Locals::Uniform(local) => vec![Classified::new(lattice, local)],
-        Locals::PerElement(all) => all
-            .par_iter()
-            .map(|l| Classified::new(lattice, l))
-            .collect(),
-    };
-    let class = |e: usize| match &locals {
-        Locals::Uniform(_) => &classified[0],
-        Locals::PerElement(_) => &classified[e],
-    };
-    let used = |e: usize, s: &SharedVertex| s.caps == 0 || s.caps & boundary[e] != 0;
-    // Slots of element e's shared vertices: slot_base[e]..slot_base[e + 1].
-    let mut slot_base = Vec::with_capacity(n + 1);
-    slot_base.push(0usize);
-    for e in 0..n {
-        slot_base.push(slot_base[e] + class(e).shared.len());
-    }
+/// What an element does with one of its shared vertices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Role {
+    /// Only caps on interior faces use it: it is not in the output.
+    Unused,
+    /// The lowest element using it: it places and numbers it.
+    Owner,
+    /// A lower element of the same chunk owns it.
+    Borrower,
+    /// An element of an earlier chunk owns it (its id is known).
+    Earlier,
+}
 
-    // Name every shared vertex every element uses; equal names are one vertex, owned by the
-    // lowest element.
-    let mut names: Vec<(u128, u32, u32)> = (0..n)
-        .into_par_iter()
-        .flat_map_iter(|e| {
-            let corners = elements.element(e);
-            class(e)
-                .shared
-                .iter()
-                .enumerate()
-                .filter(move |(_, v)| used(e, v))
-                .map(move |(s, v)| (vertex_name(corners, v), e as u32, s as u32))
-        })
-        .collect();
-    names.par_sort_unstable();
-    let slots = slot_base[n];
-    let mut group = vec![0u32; slots];
-    let mut role = vec![Role::Unused; slots];
-    let mut groups = 0u32;
-    for (r, &(name, e, s)) in names.iter().enumerate() {
-        let first = r == 0 || names[r - 1].0 != name;
-        if first {
-            groups += 1;
+/// The classified local meshes of a chunk's elements: one for all, or one each.
+enum Classes<'c> {
+    Uniform(&'c Classified),
+    Each(Vec<Classified>),
+}
+
+impl Classes<'_> {
+    fn get(&self, i: usize) -> &Classified {
+        match self {
+            Classes::Uniform(c) => c,
+            Classes::Each(all) => &all[i],
         }
-        let slot = slot_base[e as usize] + s as usize;
-        group[slot] = groups - 1;
-        role[slot] = if first { Role::Owner } else { Role::Borrower };
     }
-    drop(names);
+}
 
-    // Vertex ids: element by element, its interior vertices and the shared ones it owns, in
-    // local order.
-    let owned: Vec<u64> = (0..n)
-        .into_par_iter()
-        .map(|e| {
-            let c = class(e);
-            let interior = c.shared_index.len() - c.shared.len();
-            let roles = &role[slot_base[e]..slot_base[e + 1]];
-            (interior + roles.iter().filter(|&&r| r == Role::Owner).count()) as u64
+/// A vertex of an earlier chunk that later elements may still use.
+struct OpenVertex {
+    id: u32,
+    position: [f32; 3],
+    /// The last element that may use it.
+    last: u32,
+}
+
+/// Welds elements chunk by chunk, in element order, into the [`MeshChunk`]s of one mesh (see
+/// the module docs). Between chunks it holds only per-element face data and the vertices open
+/// across the chunk boundary (`frontier`), so memory follows the chunk, not the scaffold's size.
+pub struct Welder<'a> {
+    elements: &'a dyn Corners,
+    lattice: &'a dyn Lattice,
+    faces: FaceTable,
+    /// `None` when one chunk takes every element: nothing is ever open.
+    last: Option<LastUsers>,
+    frontier: HashMap<u128, OpenVertex, NameHasher>,
+    /// The element the next chunk starts at, and the id of its first vertex.
+    next_element: usize,
+    next_id: u64,
+    uniform: Option<Classified>,
+}
+
+impl<'a> Welder<'a> {
+    /// A welder over `elements` on `lattice`; `chunked` when it will be fed more than one chunk.
+    pub fn new(
+        elements: &'a dyn Corners,
+        lattice: &'a dyn Lattice,
+        chunked: bool,
+    ) -> Result<Welder<'a>, TileError> {
+        let faces = FaceTable::new(elements, lattice.face_masks())?;
+        let last = chunked.then(|| LastUsers::new(elements, lattice.face_masks()));
+        Ok(Welder {
+            elements,
+            lattice,
+            faces,
+            last,
+            frontier: HashMap::default(),
+            next_element: 0,
+            next_id: 0,
+            uniform: None,
         })
-        .collect();
-    let mut base = Vec::with_capacity(n + 1);
-    base.push(0u64);
-    for &c in &owned {
-        base.push(base[base.len() - 1] + c);
     }
-    if base[n] > u64::from(u32::MAX) {
-        return Err(TileError::TooManyVertices(base[n]));
+
+    pub fn stats(&self) -> TileStats {
+        self.faces.stats.clone()
     }
-    let group_id: Vec<AtomicU32> = (0..groups).map(|_| AtomicU32::new(0)).collect();
-    // Written in place, element by element in parallel: each element's vertices and
-    // triangles have a known range of the output.
-    let mut vertices = vec![[0.0f32; 3]; base[n] as usize];
-    let vertex_ranges = split_by(&mut vertices, owned.iter().map(|&c| c as usize));
-    vertex_ranges
-        .into_par_iter()
-        .enumerate()
-        .for_each(|(e, out)| {
-            let c = class(e);
-            let mut next = base[e] as u32;
-            let mut out = out.iter_mut();
-            for (i, xi) in c.xi.iter().enumerate() {
-                let s = c.shared_index[i];
-                if s != NONE {
-                    let slot = slot_base[e] + s as usize;
-                    if role[slot] != Role::Owner {
-                        continue;
-                    }
-                    group_id[group[slot] as usize].store(next, Ordering::Relaxed);
-                }
-                next += 1;
-                if let Some(v) = out.next() {
-                    *v = elements.place(e, *xi).map(|c| c as f32);
-                }
+
+    /// Welds the next `count` elements (from where the previous chunk ended), whose local
+    /// meshes are `locals`, into the next chunk of the mesh.
+    pub fn chunk(&mut self, count: usize, locals: Locals) -> Result<MeshChunk, TileError> {
+        let (lattice, elements) = (self.lattice, self.elements);
+        let start = self.next_element;
+        let end = (start + count).min(elements.count());
+        let n = end - start;
+        if let Locals::Uniform(local) = &locals
+            && self.uniform.is_none()
+        {
+            self.uniform = Some(Classified::new(lattice, local));
+        }
+        let classes = match &locals {
+            Locals::Uniform(_) => Classes::Uniform(self.uniform.as_ref().expect("classified")),
+            Locals::PerElement(all) => Classes::Each(
+                all[..n]
+                    .par_iter()
+                    .map(|l| Classified::new(lattice, l))
+                    .collect(),
+            ),
+        };
+        let class = |i: usize| classes.get(i);
+        let boundary = &self.faces.boundary[start..end];
+        let used = |i: usize, s: &SharedVertex| s.caps == 0 || s.caps & boundary[i] != 0;
+        // Slots of the chunk's i-th element's shared vertices: slot_base[i]..slot_base[i + 1].
+        let mut slot_base = Vec::with_capacity(n + 1);
+        slot_base.push(0usize);
+        for i in 0..n {
+            slot_base.push(slot_base[i] + class(i).shared.len());
+        }
+
+        // Name every shared vertex every element uses; equal names are one vertex, owned by the
+        // lowest element — of an earlier chunk when the frontier has it.
+        let mut names: Vec<(u128, u32, u32)> = (0..n)
+            .into_par_iter()
+            .flat_map_iter(|i| {
+                let corners = elements.element(start + i);
+                class(i)
+                    .shared
+                    .iter()
+                    .enumerate()
+                    .filter(move |(_, v)| used(i, v))
+                    .map(move |(s, v)| (vertex_name(corners, v), i as u32, s as u32))
+            })
+            .collect();
+        names.par_sort_unstable();
+        let slots = slot_base[n];
+        // Per slot: the chunk-local group (Owner, Borrower) or the vertex id (Earlier).
+        let mut group = vec![0u32; slots];
+        let mut role = vec![Role::Unused; slots];
+        // Per group: its name and owner slot, for the frontier.
+        let mut groups: Vec<(u128, u32, u32)> = Vec::new();
+        let mut borrowed: Vec<(u32, [f32; 3])> = Vec::new();
+        let mut r = 0;
+        while r < names.len() {
+            let name = names[r].0;
+            let mut k = r;
+            let earlier = self.frontier.get(&name);
+            if let Some(open) = earlier {
+                borrowed.push((open.id, open.position));
+            } else {
+                groups.push((name, names[r].1, names[r].2));
             }
-        });
+            while k < names.len() && names[k].0 == name {
+                let (_, i, s) = names[k];
+                let slot = slot_base[i as usize] + s as usize;
+                (role[slot], group[slot]) = match earlier {
+                    Some(open) => (Role::Earlier, open.id),
+                    None if k == r => (Role::Owner, (groups.len() - 1) as u32),
+                    None => (Role::Borrower, (groups.len() - 1) as u32),
+                };
+                k += 1;
+            }
+            r = k;
+        }
+        drop(names);
+        borrowed.sort_unstable_by_key(|&(id, _)| id);
 
-    let triangle_counts: Vec<usize> = (0..n)
-        .into_par_iter()
-        .map(|e| {
-            let local = locals.get(e);
-            let caps = local.caps.iter().enumerate();
-            local.triangles.len()
-                + caps
-                    .filter(|(f, _)| boundary[e] & 1 << f != 0)
-                    .map(|(_, cap)| cap.len())
-                    .sum::<usize>()
-        })
-        .collect();
-    let mut triangles = vec![[0u32; 3]; triangle_counts.iter().sum()];
-    let triangle_ranges = split_by(&mut triangles, triangle_counts.iter().copied());
-    triangle_ranges
-        .into_par_iter()
-        .enumerate()
-        .for_each(|(e, out)| {
-            let (local, c) = (locals.get(e), class(e));
-            let mut next = base[e] as u32;
-            let ids: Vec<u32> = (0..local.vertices.len())
-                .map(|i| {
-                    let s = c.shared_index[i];
+        // Vertex ids: element by element, its interior vertices and the shared ones it owns, in
+        // local order.
+        let owned: Vec<usize> = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let c = class(i);
+                let interior = c.shared_index.len() - c.shared.len();
+                let roles = &role[slot_base[i]..slot_base[i + 1]];
+                interior + roles.iter().filter(|&&r| r == Role::Owner).count()
+            })
+            .collect();
+        let first = self.next_id;
+        let mut base = Vec::with_capacity(n + 1);
+        base.push(first);
+        for &c in &owned {
+            base.push(base[base.len() - 1] + c as u64);
+        }
+        if base[n] > u64::from(u32::MAX) {
+            return Err(TileError::TooManyVertices(base[n]));
+        }
+        let group_id: Vec<AtomicU32> = (0..groups.len()).map(|_| AtomicU32::new(0)).collect();
+        // Written in place, element by element in parallel: each element's vertices and
+        // triangles have a known range of the chunk.
+        let mut vertices = vec![[0.0f32; 3]; (base[n] - first) as usize];
+        let vertex_ranges = split_by(&mut vertices, owned.iter().copied());
+        vertex_ranges
+            .into_par_iter()
+            .enumerate()
+            .for_each(|(i, out)| {
+                let c = class(i);
+                let mut next = base[i] as u32;
+                let mut out = out.iter_mut();
+                for (v, xi) in c.xi.iter().enumerate() {
+                    let s = c.shared_index[v];
                     if s != NONE {
-                        let slot = slot_base[e] + s as usize;
-                        match role[slot] {
-                            Role::Owner => {}
-                            // Only dropped caps use it: never referenced.
-                            Role::Unused => return u32::MAX,
-                            Role::Borrower => {
-                                return group_id[group[slot] as usize].load(Ordering::Relaxed);
-                            }
+                        let slot = slot_base[i] + s as usize;
+                        if role[slot] != Role::Owner {
+                            continue;
                         }
+                        group_id[group[slot] as usize].store(next, Ordering::Relaxed);
                     }
                     next += 1;
-                    next - 1
-                })
-                .collect();
-            let caps = local
-                .caps
-                .iter()
-                .enumerate()
-                .filter(|(f, _)| boundary[e] & 1 << f != 0)
-                .flat_map(|(_, cap)| cap.iter());
-            for (slot, t) in out.iter_mut().zip(local.triangles.iter().chain(caps)) {
-                *slot = t.map(|v| ids[v as usize]);
+                    if let Some(v) = out.next() {
+                        *v = elements.place(start + i, *xi).map(|c| c as f32);
+                    }
+                }
+            });
+
+        let triangle_counts: Vec<usize> = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let local = locals.get(i);
+                let caps = local.caps.iter().enumerate();
+                local.triangles.len()
+                    + caps
+                        .filter(|(f, _)| boundary[i] & 1 << f != 0)
+                        .map(|(_, cap)| cap.len())
+                        .sum::<usize>()
+            })
+            .collect();
+        let mut triangles = vec![[0u32; 3]; triangle_counts.iter().sum()];
+        let triangle_ranges = split_by(&mut triangles, triangle_counts.iter().copied());
+        triangle_ranges
+            .into_par_iter()
+            .enumerate()
+            .for_each(|(i, out)| {
+                let (local, c) = (locals.get(i), class(i));
+                let mut next = base[i] as u32;
+                let ids: Vec<u32> = (0..local.vertices.len())
+                    .map(|v| {
+                        let s = c.shared_index[v];
+                        if s != NONE {
+                            let slot = slot_base[i] + s as usize;
+                            match role[slot] {
+                                Role::Owner => {}
+                                // Only dropped caps use it: never referenced.
+                                Role::Unused => return u32::MAX,
+                                Role::Borrower => {
+                                    return group_id[group[slot] as usize].load(Ordering::Relaxed);
+                                }
+                                Role::Earlier => return group[slot],
+                            }
+                        }
+                        next += 1;
+                        next - 1
+                    })
+                    .collect();
+                let caps = local
+                    .caps
+                    .iter()
+                    .enumerate()
+                    .filter(|(f, _)| boundary[i] & 1 << f != 0)
+                    .flat_map(|(_, cap)| cap.iter());
+                for (slot, t) in out.iter_mut().zip(local.triangles.iter().chain(caps)) {
+                    *slot = t.map(|v| ids[v as usize]);
+                }
+            });
+
+        // What later chunks may still use: this chunk's new shared vertices whose node, edge or
+        // face reaches past it, and the earlier open ones that still do.
+        let mut open = Vec::new();
+        if let Some(last) = &self.last {
+            let face_masks = lattice.face_masks();
+            for (g, &(name, i, s)) in groups.iter().enumerate() {
+                let e = start + i as usize;
+                let corners = elements.element(e);
+                let v = &class(i as usize).shared[s as usize];
+                let mask = v.a.mask() | v.b.map_or(0, |b| b.mask());
+                let until = last.of(e, corners, mask, &self.faces, face_masks);
+                if until as usize >= end {
+                    let id = group_id[g].load(Ordering::Relaxed);
+                    let position = vertices[(u64::from(id) - first) as usize];
+                    self.frontier.insert(
+                        name,
+                        OpenVertex {
+                            id,
+                            position,
+                            last: until,
+                        },
+                    );
+                }
             }
-        });
-    Ok((
-        Mesh {
+            self.frontier.retain(|_, v| v.last as usize >= end);
+            open = self.frontier.values().map(|v| v.id).collect();
+            open.sort_unstable();
+        }
+        self.next_element = end;
+        self.next_id = base[n];
+        Ok(MeshChunk {
+            first_vertex: first as u32,
             vertices,
             triangles,
-        },
-        stats,
-    ))
+            borrowed,
+            open,
+        })
+    }
+}
+
+/// Hashes a vertex name (already a 128-bit hash) by folding it to 64 bits.
+#[derive(Clone, Copy, Default)]
+struct NameHasher;
+
+impl std::hash::BuildHasher for NameHasher {
+    type Hasher = FoldHasher;
+    fn build_hasher(&self) -> FoldHasher {
+        FoldHasher(0)
+    }
+}
+
+struct FoldHasher(u64);
+
+impl std::hash::Hasher for FoldHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0100_0000_01B3);
+        }
+    }
+    fn write_u128(&mut self, name: u128) {
+        self.0 ^= (name as u64) ^ (name >> 64) as u64;
+    }
 }
 
 /// `items` cut into consecutive slices of the given lengths (which sum to its length).
