@@ -472,33 +472,46 @@ impl<'a> Welder<'a> {
             .collect();
         names.par_sort_unstable();
         let slots = slot_base[n];
+        // Runs of equal names, and whether an earlier chunk has each: found in parallel, as
+        // these are millions of lookups a chunk.
+        let starts: Vec<usize> = (0..names.len())
+            .into_par_iter()
+            .filter(|&r| r == 0 || names[r].0 != names[r - 1].0)
+            .collect();
+        let frontier = &self.frontier;
+        let earlier: Vec<Option<(u32, [f32; 3])>> = starts
+            .par_iter()
+            .map(|&r| match frontier.is_empty() {
+                true => None,
+                false => frontier.get(&names[r].0).map(|o| (o.id, o.position)),
+            })
+            .collect();
+        // Per new group: its name and owner slot, for the frontier; per run: its new group.
+        let mut groups: Vec<(u128, u32, u32)> = Vec::new();
+        let mut borrowed: Vec<(u32, [f32; 3])> = Vec::new();
+        let mut run_group = vec![NONE; starts.len()];
+        for (k, &r) in starts.iter().enumerate() {
+            match earlier[k] {
+                Some(vertex) => borrowed.push(vertex),
+                None => {
+                    run_group[k] = groups.len() as u32;
+                    groups.push(names[r]);
+                }
+            }
+        }
         // Per slot: the chunk-local group (Owner, Borrower) or the vertex id (Earlier).
         let mut group = vec![0u32; slots];
         let mut role = vec![Role::Unused; slots];
-        // Per group: its name and owner slot, for the frontier.
-        let mut groups: Vec<(u128, u32, u32)> = Vec::new();
-        let mut borrowed: Vec<(u32, [f32; 3])> = Vec::new();
-        let mut r = 0;
-        while r < names.len() {
-            let name = names[r].0;
-            let mut k = r;
-            let earlier = self.frontier.get(&name);
-            if let Some(open) = earlier {
-                borrowed.push((open.id, open.position));
-            } else {
-                groups.push((name, names[r].1, names[r].2));
-            }
-            while k < names.len() && names[k].0 == name {
-                let (_, i, s) = names[k];
+        for (k, &r) in starts.iter().enumerate() {
+            let end = starts.get(k + 1).copied().unwrap_or(names.len());
+            for (at, &(_, i, s)) in names[r..end].iter().enumerate() {
                 let slot = slot_base[i as usize] + s as usize;
-                (role[slot], group[slot]) = match earlier {
-                    Some(open) => (Role::Earlier, open.id),
-                    None if k == r => (Role::Owner, (groups.len() - 1) as u32),
-                    None => (Role::Borrower, (groups.len() - 1) as u32),
+                (role[slot], group[slot]) = match earlier[k] {
+                    Some((id, _)) => (Role::Earlier, id),
+                    None if at == 0 => (Role::Owner, run_group[k]),
+                    None => (Role::Borrower, run_group[k]),
                 };
-                k += 1;
             }
-            r = k;
         }
         drop(names);
         borrowed.sort_unstable_by_key(|&(id, _)| id);
