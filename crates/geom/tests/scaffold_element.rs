@@ -172,6 +172,20 @@ fn shape_functions_interpolate_the_nodes_and_sum_to_one() {
 }
 
 #[test]
+fn shape_values_alone_are_bitwise_those_evaluated_with_gradients() {
+    for kind in ElementKind::ALL {
+        let n = kind.node_count();
+        for p in sample_points(kind) {
+            let (mut alone, mut with, mut grad) = (vec![0.0; n], vec![0.0; n], vec![[0.0; 3]; n]);
+            kind.shape(p, &mut alone);
+            kind.evaluate(p, &mut with, &mut grad);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&alone), bits(&with), "{kind} at {p:?}");
+        }
+    }
+}
+
+#[test]
 fn gradients_match_finite_differences() {
     let h = 1e-6;
     for kind in ElementKind::ALL {

@@ -287,10 +287,29 @@ impl ElementKind {
         }
     }
 
-    /// Shape functions at reference point `xi` into `out[..node_count]`.
+    /// Shape functions at reference point `xi` into `out[..node_count]`: the same values as
+    /// [`ElementKind::evaluate`]'s, without the gradients (the map runs this for every output
+    /// vertex of a tiling, where zeroing a gradient table per call cost more than the map).
     pub fn shape(self, xi: [f64; 3], out: &mut [f64]) {
-        let mut grad = [[0.0; 3]; ElementKind::MAX_NODES];
-        self.evaluate(xi, &mut out[..self.node_count()], &mut grad);
+        let l = match self {
+            ElementKind::Tri3 | ElementKind::Tri6 => tri_barycentric(xi).0,
+            ElementKind::Tet4 | ElementKind::Tet10 => tet_barycentric(xi).0,
+            _ => {
+                let mut grad = [[0.0; 3]; ElementKind::MAX_NODES];
+                return self.evaluate(xi, &mut out[..self.node_count()], &mut grad);
+            }
+        };
+        let corners = self.corner_count();
+        if self.order() == 1 {
+            out[..corners].copy_from_slice(&l[..corners]);
+            return;
+        }
+        for i in 0..corners {
+            out[i] = l[i] * (2.0 * l[i] - 1.0);
+        }
+        for (j, &[a, b]) in self.edges().iter().enumerate() {
+            out[corners + j] = 4.0 * l[a] * l[b];
+        }
     }
 
     /// Derivatives dN_i/dξ_a into `out[i][a]` (the unused reference coordinates get 0).
