@@ -53,6 +53,11 @@
 //! its own fan locally, and each edge `{a, b}` with `a < b` is classified from vertex `a`
 //! only, so no global edge table is needed. Besides the mesh, the passes hold about 24 bytes
 //! per triangle (the per-vertex lists) and a few tens of bytes per vertex.
+//!
+//! [`StreamCheck`] (`stream.rs`) gives the same measurements for a mesh that arrives as
+//! [`MeshChunk`](crate::mesh::MeshChunk)s, holding one chunk and the open vertices at a time:
+//! a vertex's fan is classified when no later chunk can touch it. It equals [`check`] in every
+//! field except that duplicate positions are only matched between vertices alive together.
 
 use crate::mesh::Mesh;
 use rayon::prelude::*;
