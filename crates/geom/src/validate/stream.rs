@@ -6,9 +6,11 @@
 //!   [`check`](super::check) of the concatenated mesh in every field, bit for bit (volume and
 //!   area included: the sums are cut at the same global triangle indices and added in the same
 //!   order), with one documented exception, `duplicate_positions` (below).
-//! - Between pushes the state is the open vertices only: for each, its id, position, the
+//! - Between pushes the mesh state is the open vertices only: for each, its id, position, the
 //!   corners of the triangles seen so far at it (its partial fan, 8 bytes a corner) and, for a
-//!   few, a duplicate-class count. Nothing grows with the finished part of the mesh.
+//!   few, a duplicate-class count. Nothing grows with the finished part of the mesh. The
+//!   push's buffers (36 bytes per triangle and 5 + 4 × threads (at most 8) per vertex of the
+//!   largest chunk) are kept for the next push.
 //! - [`StreamCheck::push`] never panics, whatever the chunk holds, and the result does not
 //!   depend on the thread count (sums over fixed global chunks, integer counts, min/max).
 //!
@@ -88,6 +90,47 @@ pub struct StreamCheck {
     bbox_min: [f32; 3],
     bbox_max: [f32; 3],
     open: OpenSet,
+    scratch: Scratch,
+}
+
+/// The buffers of a push, kept for the next one: allocating them afresh costs a page fault
+/// per 4 KiB, about a tenth of a push. Their size follows the largest chunk so far.
+#[derive(Default)]
+struct Scratch {
+    locals: Vec<[u32; 3]>,
+    links: Vec<u64>,
+    state: Vec<u8>,
+    /// Cursor and degree arrays, when the index type is `u32`.
+    counts: Vec<Vec<u32>>,
+}
+
+/// Index types whose count arrays come from [`Scratch`] (`u32`) or are allocated (`u64`,
+/// only for chunks of over a billion triangles).
+trait Counts: Index {
+    /// A zeroed array of `len` counts.
+    fn take(pool: &mut Vec<Vec<u32>>, len: usize) -> Vec<Self>;
+    fn give(pool: &mut Vec<Vec<u32>>, counts: Vec<Self>);
+}
+
+impl Counts for u32 {
+    fn take(pool: &mut Vec<Vec<u32>>, len: usize) -> Vec<u32> {
+        let mut counts = pool.pop().unwrap_or_default();
+        counts.clear();
+        counts.resize(len, 0);
+        counts
+    }
+
+    fn give(pool: &mut Vec<Vec<u32>>, counts: Vec<u32>) {
+        pool.push(counts);
+    }
+}
+
+impl Counts for u64 {
+    fn take(_: &mut Vec<Vec<u32>>, len: usize) -> Vec<u64> {
+        vec![0; len]
+    }
+
+    fn give(_: &mut Vec<Vec<u32>>, _: Vec<u64>) {}
 }
 
 /// The open vertices, sorted by id, and what is held for each.
@@ -159,6 +202,7 @@ impl StreamCheck {
             bbox_min: [f32::INFINITY; 3],
             bbox_max: [f32::NEG_INFINITY; 3],
             open: OpenSet::default(),
+            scratch: Scratch::default(),
         }
     }
 
@@ -255,8 +299,9 @@ impl StreamCheck {
     }
 
     /// One push; `I` counts the corners held and brought (see `advance`).
-    fn advance_with<I: Index>(&mut self, view: View) {
+    fn advance_with<I: Counts>(&mut self, view: View) {
         let prev = std::mem::take(&mut self.open);
+        let mut scratch = std::mem::take(&mut self.scratch);
         let alive = Alive::new(&prev, &view);
         let first = view.first;
         let borrowed = &view.borrowed[..alive.borrowed_local.len()];
@@ -286,11 +331,16 @@ impl StreamCheck {
         }
         let reference = self.reference.unwrap_or([0.0; 3]);
 
-        let (locals, degrees) = self.triangle_pass::<I>(&view, n, &lookup, reference);
-        let (offsets, links) = scatter(&prev, &alive, &view, &locals, degrees, n);
-        drop(locals);
+        let locals = std::mem::take(&mut scratch.locals);
+        let (locals, degrees) =
+            self.triangle_pass::<I>(&view, n, &lookup, reference, locals, &mut scratch.counts);
+        let links = std::mem::take(&mut scratch.links);
+        let (offsets, links) = scatter(&prev, &alive, &view, &locals, degrees, links, &mut scratch);
+        scratch.locals = locals;
 
-        let mut state = vec![0u8; n];
+        let mut state = std::mem::take(&mut scratch.state);
+        state.clear();
+        state.resize(n, 0);
         for &id in view.open.iter() {
             if let Some(v) = alive.local(id, &view) {
                 state[v] |= OPEN;
@@ -345,17 +395,23 @@ impl StreamCheck {
             next.offsets.push(next.links.len());
         }
         self.open = next;
+        I::give(&mut scratch.counts, offsets);
+        scratch.links = links;
+        scratch.state = state;
+        self.scratch = scratch;
     }
 
     /// Sums the geometry of the view's triangles into the global triangle chunks, and gives
     /// each triangle's local corners (`INVALID` for invalid triangles) and the corner counts
     /// at every alive vertex, one array per part.
-    fn triangle_pass<I: Index>(
+    fn triangle_pass<I: Counts>(
         &mut self,
         view: &View,
         n: usize,
         lookup: &(impl Fn(u32) -> Option<(u32, [f32; 3])> + Sync),
         reference: [f64; 3],
+        mut locals: Vec<[u32; 3]>,
+        pool: &mut Vec<Vec<u32>>,
     ) -> (Vec<[u32; 3]>, Vec<Vec<I>>) {
         let count = view.triangles.len();
         // Segments cut where the global triangle index is a multiple of TRIANGLE_CHUNK, so the
@@ -374,20 +430,21 @@ impl StreamCheck {
             .min(segments.len().max(1));
         let per_part = segments.len().div_ceil(parts).max(1);
 
-        let mut locals = vec![[0u32; 3]; count];
+        // Every entry is written below: the old contents need no clearing.
+        locals.truncate(count);
+        locals.resize(count, [0; 3]);
         let mut work = Vec::with_capacity(parts);
         let mut rest = locals.as_mut_slice();
         for part in segments.chunks(per_part) {
             let length = part[part.len() - 1].1 - part[0].0;
             let (head, tail) = rest.split_at_mut(length);
-            work.push((part, head));
+            work.push((part, head, I::take(pool, n)));
             rest = tail;
         }
         let partial = &self.partial;
         let results: Vec<(Vec<TriangleSums>, Vec<I>)> = work
             .into_par_iter()
-            .map(|(part, out)| {
-                let mut degrees = vec![I::default(); n];
+            .map(|(part, out, mut degrees)| {
                 let mut sums_of = Vec::with_capacity(part.len());
                 let base = part[0].0;
                 for &(start, end) in part {
@@ -525,14 +582,16 @@ impl Alive {
 /// The counting sort's scatter, as in `check` (`Links::scatter`): each thread owns a range of
 /// alive vertices and places their corners, first those carried for open vertices, then the
 /// view's in triangle order. Returns the offsets and the corners (links).
-fn scatter<I: Index>(
+fn scatter<I: Counts>(
     prev: &OpenSet,
     alive: &Alive,
     view: &View,
     locals: &[[u32; 3]],
     degrees: Vec<Vec<I>>,
-    n: usize,
+    mut links: Vec<u64>,
+    scratch: &mut Scratch,
 ) -> (Vec<I>, Vec<u64>) {
+    let n = alive.earlier + view.vertices.len();
     let carried = |v: usize| -> &[u64] {
         match alive.prev_index.get(v) {
             Some(&i) if i != u32::MAX => {
@@ -543,17 +602,21 @@ fn scatter<I: Index>(
         }
     };
     // cursors[v + 1] = start of v for now; each advances to the start of v + 1.
-    let mut cursors = vec![I::default(); n + 1];
+    let mut cursors = I::take(&mut scratch.counts, n + 1);
     let mut total = 0;
     for v in 0..n {
         cursors[v + 1] = I::from_usize(total);
         total += carried(v).len() + degrees.iter().map(|d| d[v].to_usize()).sum::<usize>();
     }
-    drop(degrees);
+    for part in degrees {
+        I::give(&mut scratch.counts, part);
+    }
 
     let parts = rayon::current_num_threads().max(1);
     let part_len = n.div_ceil(parts).max(1);
-    let mut links = vec![0u64; total];
+    // Every slot is written below: the old contents need no clearing.
+    links.truncate(total);
+    links.resize(total, 0);
     let mut link_parts = Vec::with_capacity(parts);
     let mut rest = links.as_mut_slice();
     let mut taken = 0;
