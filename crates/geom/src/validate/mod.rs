@@ -53,9 +53,17 @@
 //! its own fan locally, and each edge `{a, b}` with `a < b` is classified from vertex `a`
 //! only, so no global edge table is needed. Besides the mesh, the passes hold about 24 bytes
 //! per triangle (the per-vertex lists) and a few tens of bytes per vertex.
+//!
+//! [`StreamCheck`] (`stream.rs`) gives the same measurements for a mesh that arrives as
+//! [`MeshChunk`](crate::mesh::MeshChunk)s, holding one chunk and the open vertices at a time:
+//! a vertex's fan is classified when no later chunk can touch it. It equals [`check`] in every
+//! field except that duplicate positions are only matched between vertices alive together.
 
 use crate::mesh::Mesh;
 use rayon::prelude::*;
+
+mod stream;
+pub use stream::StreamCheck;
 
 /// The measurements and verdicts of [`check`]. Counts follow the module definitions.
 #[derive(Clone, Debug, PartialEq)]
@@ -101,8 +109,25 @@ fn analyse<I: Index>(mesh: &Mesh) -> MeshCheck {
     let links = Links::scatter(mesh, cursors);
     let fans = fan_pass(&links);
     drop(links);
+    report(
+        mesh.triangles.len(),
+        mesh.vertices.len(),
+        &geometry,
+        &vertices,
+        &fans,
+    )
+}
 
-    let valid_triangles = mesh.triangles.len() - geometry.invalid;
+/// The counts and verdicts from the passes' sums; shared with [`StreamCheck`] so both apply
+/// the same definitions. `all_vertices` counts referenced and unreferenced vertices.
+fn report(
+    triangles: usize,
+    all_vertices: usize,
+    geometry: &Geometry,
+    vertices: &VertexSums,
+    fans: &FanSums,
+) -> MeshCheck {
+    let valid_triangles = triangles - geometry.invalid;
     let euler_characteristic =
         vertices.referenced as i64 - fans.edges as i64 + valid_triangles as i64;
     let watertight = valid_triangles > 0
@@ -125,7 +150,7 @@ fn analyse<I: Index>(mesh: &Mesh) -> MeshCheck {
         )
     };
     MeshCheck {
-        triangles: mesh.triangles.len(),
+        triangles,
         vertices: vertices.referenced,
         edges: fans.edges,
         boundary_edges: fans.boundary,
@@ -134,7 +159,7 @@ fn analyse<I: Index>(mesh: &Mesh) -> MeshCheck {
         nonmanifold_vertices: fans.nonmanifold_vertices,
         degenerate_triangles: geometry.degenerate,
         duplicate_positions: vertices.duplicates,
-        unreferenced_vertices: mesh.vertices.len() - vertices.referenced,
+        unreferenced_vertices: all_vertices.saturating_sub(vertices.referenced),
         invalid_triangles: geometry.invalid,
         euler_characteristic,
         volume: geometry.volume,
@@ -207,7 +232,7 @@ fn position(mesh: &Mesh, index: u32) -> [f64; 3] {
     mesh.vertices[index as usize].map(f64::from)
 }
 
-#[derive(Default)]
+#[derive(Clone, Default)]
 struct TriangleSums {
     invalid: usize,
     degenerate: usize,
@@ -232,6 +257,37 @@ impl TriangleSums {
             *t += s;
         }
         self.twice_area += other.twice_area;
+    }
+
+    /// Adds the valid triangle `tri` with corner positions `[a, b, c]`, volume relative to
+    /// `reference`. The one place this arithmetic is written, so [`check`] and [`StreamCheck`]
+    /// sum bit-identical terms.
+    #[inline]
+    fn add_triangle(&mut self, tri: &[u32; 3], [a, b, c]: [[f64; 3]; 3], reference: [f64; 3]) {
+        let normal = cross(sub(b, a), sub(c, a));
+        let twice_area = dot(normal, normal).sqrt();
+        let repeated = tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2];
+        if repeated || !(twice_area > 0.0 && twice_area.is_finite()) {
+            self.degenerate += 1;
+        }
+        // (a − o) · ((b − o) × (c − o)) = (a − o) · ((b − a) × (c − a)).
+        self.six_volume += dot(sub(a, reference), normal);
+        for (total, component) in self.twice_vector_area.iter_mut().zip(normal) {
+            *total += component;
+        }
+        self.twice_area += twice_area;
+    }
+
+    /// The totals, with the volume moved from `reference` back to the origin.
+    fn geometry(&self, reference: [f64; 3]) -> Geometry {
+        // Σ a · n = Σ (a − o) · n + o · Σ n.
+        let six_volume = self.six_volume + dot(reference, self.twice_vector_area);
+        Geometry {
+            invalid: self.invalid,
+            degenerate: self.degenerate,
+            volume: six_volume / 6.0,
+            area: self.twice_area / 2.0,
+        }
     }
 }
 
@@ -283,14 +339,7 @@ fn triangle_pass<I: Index>(mesh: &Mesh) -> (Geometry, Vec<Vec<I>>) {
             total.add(chunk);
         }
     }
-    // Σ a · n = Σ (a − o) · n + o · Σ n.
-    let six_volume = total.six_volume + dot(reference, total.twice_vector_area);
-    let geometry = Geometry {
-        invalid: total.invalid,
-        degenerate: total.degenerate,
-        volume: six_volume / 6.0,
-        area: total.twice_area / 2.0,
-    };
+    let geometry = total.geometry(reference);
 
     let degrees = results.into_iter().map(|(_, degrees)| degrees).collect();
     (geometry, degrees)
@@ -314,19 +363,7 @@ fn triangle_chunk<I: Index>(
             let degree = &mut degrees[v as usize];
             *degree = I::from_usize(degree.to_usize() + 1);
         }
-        let [a, b, c] = tri.map(|i| position(mesh, i));
-        let normal = cross(sub(b, a), sub(c, a));
-        let twice_area = dot(normal, normal).sqrt();
-        let repeated = tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2];
-        if repeated || !(twice_area > 0.0 && twice_area.is_finite()) {
-            sums.degenerate += 1;
-        }
-        // (a − o) · ((b − o) × (c − o)) = (a − o) · ((b − a) × (c − a)).
-        sums.six_volume += dot(sub(a, reference), normal);
-        for (total, component) in sums.twice_vector_area.iter_mut().zip(normal) {
-            *total += component;
-        }
-        sums.twice_area += twice_area;
+        sums.add_triangle(tri, tri.map(|i| position(mesh, i)), reference);
     }
     sums
 }
