@@ -4,7 +4,7 @@
 //! Invariant: only volume scaffolds (tet4/tet10, hex8/hex20/hex27) are tiled here; the first
 //! `corner_count` nodes of every kind are its corners in the reference element's order.
 
-use super::{ElementMap, Elements, TileError, TileStats, TiledSolid, tile};
+use super::{ElementMap, Elements, Nodes, TileError, TileStats, TiledSolid, tile};
 use crate::element::Element3;
 use crate::mesh::Mesh;
 use crate::scaffold::{ElementKind, Scaffold};
@@ -34,9 +34,18 @@ pub fn tile_scaffold(
     let elements = Elements {
         shape,
         corners: &corners,
+        nodes: nodes(scaffold),
         map: scaffold,
     };
-    tile(&elements, solid, resolution)
+    tile(&elements, solid, resolution).map_err(|e| e.tagged(&scaffold.element_tags))
+}
+
+/// Every node of every element of `scaffold`, which interpolate its nodal values.
+pub(super) fn nodes(scaffold: &Scaffold) -> Nodes<'_> {
+    Nodes {
+        kind: scaffold.kind,
+        ids: &scaffold.connectivity,
+    }
 }
 
 /// The reference shape of a volume scaffold and its elements' corner nodes, element by element.

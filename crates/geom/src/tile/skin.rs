@@ -179,7 +179,9 @@ pub fn tile_scaffold_with_skin(
     let elements = Elements {
         shape,
         corners: &corners,
+        nodes: super::scaffold::nodes(scaffold),
         map: scaffold,
     };
     tile_with(&elements, solid, Some(&skin), resolution)
+        .map_err(|e| e.tagged(&scaffold.element_tags))
 }
