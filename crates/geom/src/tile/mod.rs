@@ -334,6 +334,8 @@ struct ElementSamples<'s> {
     shape: Shape,
     /// The lattice points, in index order.
     points: Vec<SamplePoint>,
+    /// How far below its nodal values an interpolant can reach ([`Shape::undershoot`]).
+    undershoot: f64,
 }
 
 /// A lattice point: its index, corner weights (naming it, and placing the skin term) and
@@ -360,7 +362,7 @@ impl<'s> ElementSamples<'s> {
             Some((_, w)) => Shape::from_weights(nodes.kind, w),
             None => Shape::new(nodes.kind, 1),
         };
-        let points = weights
+        let points: Vec<SamplePoint> = weights
             .into_iter()
             .map(|(index, weights)| SamplePoint {
                 index,
@@ -368,6 +370,7 @@ impl<'s> ElementSamples<'s> {
                 at: shape.point(&weights),
             })
             .collect();
+        let undershoot = shape.undershoot(points.iter().map(|p| p.at));
         let samples = ElementSamples {
             solid,
             skin: None,
@@ -379,6 +382,7 @@ impl<'s> ElementSamples<'s> {
             nodes,
             shape,
             points,
+            undershoot,
         };
         samples.check_thickness()?;
         Ok(samples)
@@ -415,6 +419,18 @@ impl<'s> ElementSamples<'s> {
         let denominator = self.shape.denominator();
         let lowest = |e: usize| {
             let nodes = self.nodes.element(e);
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            for &n in nodes {
+                // NaN compares false, so leaves `lo` NaN and fails the bound below.
+                let t = thickness[n as usize];
+                lo = if t < lo || t.is_nan() { t } else { lo };
+                hi = hi.max(t);
+            }
+            // Every interpolant is ≥ lo − (hi − lo)·undershoot: most elements need no sample
+            // pass. The margin dwarfs the sums' rounding (~1e-15 relative).
+            if lo > 0.0 && lo - (hi - lo) * self.undershoot > 1e-9 * hi {
+                return lo;
+            }
             let order = Order::of(nodes);
             let values = order.gather(nodes, thickness);
             let mut lowest = f64::INFINITY;
@@ -430,7 +446,8 @@ impl<'s> ElementSamples<'s> {
         let bad = (0..self.nodes.count())
             .into_par_iter()
             .map(|e| (e, lowest(e)))
-            .find_first(|&(_, t)| !(t > 0.0));
+            // NaN fails too.
+            .find_first(|&(_, t)| t.is_nan() || t <= 0.0);
         match bad {
             Some((e, t)) => Err(TileError::Thickness {
                 element: e as u64,
@@ -447,26 +464,32 @@ impl<'s> ElementSamples<'s> {
         let corners = &nodes[..self.shape.corner_count()];
         let skin = self.skin.filter(|s| !s.is_far(corners));
         let order = Order::of(nodes);
-        let gather = |nodal: Option<&[f64]>| nodal.map(|v| order.gather(nodes, v));
-        let weight = gather(solid.transition.as_ref().map(|t| t.weight));
-        let thickness = gather(solid.thickness);
-        let offset = gather(solid.offset);
+        // Missing arrays are interpolated as zeros and not used.
+        let gather = |nodal: Option<&[f64]>| {
+            nodal.map_or([0.0; shape::MAX_NODES], |v| order.gather(nodes, v))
+        };
+        let arrays = [
+            gather(solid.transition.as_ref().map(|t| t.weight)),
+            gather(solid.thickness),
+            gather(solid.offset),
+        ];
+        let arrays = [&arrays[0][..], &arrays[1][..], &arrays[2][..]];
         let denominator = self.shape.denominator();
         self.for_each_point(&order, |point, n| {
             let p = point.index as usize;
             // Σ nᵢ vᵢ / D in increasing global node order: the same bits from every element
             // sharing the point.
-            let at = |values: &[f64; shape::MAX_NODES]| shape::interpolate(n, values, denominator);
+            let [weight, thickness, offset] = shape::interpolate_each(n, &arrays, denominator);
             let mut phi = self.cell[p];
-            if let (Some(w), Some(to)) = (&weight, &self.to) {
+            if let Some(to) = &self.to {
                 // The quadratic interpolant may leave [0, 1] between nodal weights.
-                let w = at(w).clamp(0.0, 1.0);
+                let w = weight.clamp(0.0, 1.0);
                 phi = (1.0 - w) * phi + w * to[p];
             }
             let graded = graded_solid(
                 solid.solid,
-                thickness.as_ref().map(at),
-                offset.as_ref().map(at),
+                solid.thickness.map(|_| thickness),
+                solid.offset.map(|_| offset),
             );
             values[p] = graded.apply(phi);
             if let Some(skin) = skin {

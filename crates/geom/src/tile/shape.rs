@@ -183,22 +183,26 @@ impl Shape {
     pub fn numerators(&self, point: &Point, out: &mut [i64; MAX_NODES]) {
         let m = self.m;
         let c = point.0;
+        let nodes = self.nodes.iter();
         match self.family {
-            Family::Simplex { quadratic } => {
-                for (slot, node) in out.iter_mut().zip(&self.nodes) {
+            Family::Simplex { quadratic: false } => {
+                for (slot, node) in out.iter_mut().zip(nodes) {
+                    *slot = c[usize::from(node.pair[0])];
+                }
+            }
+            Family::Simplex { quadratic: true } => {
+                for (slot, node) in out.iter_mut().zip(nodes) {
                     let [i, j] = node.pair.map(usize::from);
-                    *slot = if !quadratic {
-                        c[i]
-                    } else if i == j {
+                    *slot = if i == j {
                         c[i] * (2 * c[i] - m)
                     } else {
                         4 * c[i] * c[j]
                     };
                 }
             }
-            _ => {
-                // Per axis, the linear factors at s = −1, +1 and the quadratic ones at
-                // s = −1, 0, +1 (index s + 1).
+            family => {
+                // Per axis, indexed by s + 1: the linear factors (s = ±1) and the quadratic
+                // ones (s = −1, 0, 1). Axes past the dimension are 1 (their s is 0).
                 let mut linear = [[1i64; 3]; 3];
                 let mut quad = [[1i64; 3]; 3];
                 for a in 0..self.dim {
@@ -206,37 +210,62 @@ impl Shape {
                     linear[a] = [m - x, 0, x];
                     quad[a] = [(2 * x - m) * (x - m), 4 * x * (m - x), (2 * x - m) * x];
                 }
-                let idx = |s: i8| (s + 1) as usize;
-                for (slot, node) in out.iter_mut().zip(&self.nodes) {
-                    let s = node.s;
-                    *slot = match self.family {
-                        Family::Lagrange => (0..self.dim).map(|a| quad[a][idx(s[a])]).product(),
-                        Family::Multilinear => {
-                            (0..self.dim).map(|a| linear[a][idx(s[a])]).product()
+                let idx = |node: &Node, a: usize| (node.s[a] + 1) as usize;
+                let product = |table: &[[i64; 3]; 3], node: &Node| {
+                    table[0][idx(node, 0)] * table[1][idx(node, 1)] * table[2][idx(node, 2)]
+                };
+                match family {
+                    Family::Multilinear => {
+                        for (slot, node) in out.iter_mut().zip(nodes) {
+                            *slot = product(&linear, node);
                         }
-                        _ => match (0..self.dim).find(|&a| s[a] == 0) {
-                            None => {
-                                let sum: i64 = (0..self.dim)
-                                    .map(|a| (2 * c[a] - m) * i64::from(s[a]))
-                                    .sum();
-                                let product: i64 =
-                                    (0..self.dim).map(|a| linear[a][idx(s[a])]).product();
-                                product * (sum - (self.dim as i64 - 1) * m)
-                            }
-                            Some(z) => (0..self.dim)
-                                .map(|a| {
-                                    if a == z {
-                                        quad[a][1]
-                                    } else {
-                                        linear[a][idx(s[a])]
-                                    }
-                                })
-                                .product(),
-                        },
-                    };
+                    }
+                    Family::Lagrange => {
+                        for (slot, node) in out.iter_mut().zip(nodes) {
+                            *slot = product(&quad, node);
+                        }
+                    }
+                    _ => {
+                        let d = self.dim as i64;
+                        for (slot, node) in out.iter_mut().zip(nodes) {
+                            *slot = match (0..self.dim).find(|&a| node.s[a] == 0) {
+                                None => {
+                                    let sum: i64 = (0..self.dim)
+                                        .map(|a| (2 * c[a] - m) * i64::from(node.s[a]))
+                                        .sum();
+                                    product(&linear, node) * (sum - (d - 1) * m)
+                                }
+                                Some(z) => {
+                                    // The zero axis takes the bubble 4c(m − c), the others
+                                    // their linear factor.
+                                    let mut table = linear;
+                                    table[z] = [quad[z][1]; 3];
+                                    product(&table, node)
+                                }
+                            };
+                        }
+                    }
                 }
             }
         }
+    }
+
+    /// The most any point's negative numerators add up to, over `D`: an interpolant is at
+    /// least `min v − (max v − min v) · this` (0 for the linear kinds).
+    pub fn undershoot(&self, points: impl Iterator<Item = Point>) -> f64 {
+        let mut out = [0; MAX_NODES];
+        let worst = points
+            .map(|p| {
+                self.numerators(&p, &mut out);
+                out[..self.nodes.len()]
+                    .iter()
+                    .filter(|&&n| n < 0)
+                    .map(|n| -n)
+                    .sum::<i64>()
+            })
+            .max()
+            .unwrap_or(0);
+        worst as f64 / self.denominator as f64
     }
 
     /// How many of the nodes are corners.
@@ -295,13 +324,27 @@ impl Order {
 /// zero or a non-finite value there.
 #[inline]
 pub fn interpolate(numerators: &[i64], values: &[f64], denominator: i64) -> f64 {
-    let mut sum = 0.0;
-    for (&n, &v) in numerators.iter().zip(values) {
+    interpolate_each(numerators, &[values], denominator)[0]
+}
+
+/// [`interpolate`] for `K` arrays at once (one pass over the numerators; each sum has the
+/// same terms in the same order, so the same bits as alone).
+#[inline]
+pub fn interpolate_each<const K: usize>(
+    numerators: &[i64],
+    values: &[&[f64]; K],
+    denominator: i64,
+) -> [f64; K] {
+    let mut sums = [0.0; K];
+    for (k, &n) in numerators.iter().enumerate() {
         if n != 0 {
-            sum += n as f64 * v;
+            let n = n as f64;
+            for (sum, v) in sums.iter_mut().zip(values) {
+                *sum += n * v[k];
+            }
         }
     }
-    sum / denominator as f64
+    sums.map(|s| s / denominator as f64)
 }
 
 /// The node lists against the corner lists: as many elements, the node kind's corner count,

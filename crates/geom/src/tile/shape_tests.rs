@@ -165,11 +165,11 @@ fn nodes_off_a_face_have_zero_numerators_on_it() {
                         continue;
                     }
                     shape.numerators(&shape.point(&weights), &mut out);
-                    for i in 0..kind.node_count() {
+                    for (i, &numerator) in out.iter().enumerate().take(kind.node_count()) {
                         if off.contains(&i) {
                             checked += 1;
-                            assert_eq!(out[i], 0, "{kind} n = {n} face {face:b} node {i}");
-                        } else if out[i] != 0 && i >= kind.corner_count() {
+                            assert_eq!(numerator, 0, "{kind} n = {n} face {face:b} node {i}");
+                        } else if numerator != 0 && i >= kind.corner_count() {
                             on_face_nonzero += 1;
                         }
                     }
@@ -179,6 +179,44 @@ fn nodes_off_a_face_have_zero_numerators_on_it() {
             // The face's own mid-edge/face nodes do take part once there are interior face points.
             if kind.order() == 2 && n > 2 {
                 assert!(on_face_nonzero > 0, "{kind} n = {n}");
+            }
+        }
+    }
+}
+
+#[test]
+fn interpolants_stay_above_the_undershoot_bound() {
+    // Pseudo-random nodal values in [0.1, 1.1]: every interpolant is at least
+    // lo − (hi − lo)·undershoot, and the bound is attained closely for the quadratic kinds.
+    let mut seed = 0x2545_f491_4f6c_dd1du64;
+    let mut next = || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        0.1 + (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for kind in ElementKind::ALL {
+        let n = 7;
+        let lattice = lattice(kind, n);
+        let shape = Shape::new(kind, n as u32 - 1);
+        let all: Vec<Point> = points(lattice.as_ref())
+            .map(|p| shape.point(&lattice.weights(p)))
+            .collect();
+        let undershoot = shape.undershoot(all.iter().copied());
+        if kind.order() == 1 {
+            assert_eq!(undershoot, 0.0, "{kind}");
+        } else {
+            assert!(undershoot > 0.05, "{kind}: {undershoot}");
+        }
+        let mut out = [0; MAX_NODES];
+        for _ in 0..50 {
+            let values: Vec<f64> = (0..kind.node_count()).map(|_| next()).collect();
+            let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = values.iter().copied().fold(0.0, f64::max);
+            for point in &all {
+                shape.numerators(point, &mut out);
+                let v = interpolate(&out[..kind.node_count()], &values, shape.denominator());
+                assert!(v >= lo - (hi - lo) * undershoot - 1e-14, "{kind}: {v}");
             }
         }
     }
