@@ -14,7 +14,11 @@
 //! - Everything only known once the scaffold is read is checked here with an error naming the
 //!   file: the element kind against the cells' group, inverted or degenerate elements (by
 //!   element tag), missing node-data views (listing those the file has), non-finite or
-//!   non-positive graded values (by node tag). Transition weights are clamped to [0, 1].
+//!   non-positive graded values (by node tag). Nodal values are interpolated by the element's
+//!   own (linear or quadratic) shape functions: transition weights are clamped to [0, 1] after
+//!   interpolation, at every sample (so a `by` that leaves [0, 1] is the clamp of its
+//!   interpolant), and a thickness whose quadratic interpolant dips to ≤ 0 inside an element is
+//!   an error naming the element (`latticebuild_geom::tile`).
 //! - Expressions are evaluated at the scaffold's node positions (model units).
 //! - `extrude`/`thickness_normal` on a 3D scaffold, `skin` on a 2D one, and `extrude` on a
 //!   curved surface are errors naming the file and its element kind.
@@ -38,7 +42,9 @@ use crate::manifest::{
     tiling_group,
 };
 
-pub const VERSION: u32 = 2;
+/// 3: quadratic elements interpolate nodal values through all their nodes; weights clamped
+/// after interpolation.
+pub const VERSION: u32 = 3;
 
 /// Where the scaffold comes from.
 #[derive(Clone, Debug, PartialEq)]
@@ -242,8 +248,7 @@ impl TileStage {
                 .map(|v| self.nodal_values(&scaffold, what, v))
                 .transpose()
         };
-        let weight = nodal("by", &self.by)?
-            .map(|w| w.into_iter().map(|v| v.clamp(0.0, 1.0)).collect::<Vec<_>>());
+        let weight = nodal("by", &self.by)?;
         let thickness = nodal("thickness", &self.thickness)?;
         if let Some(values) = &thickness {
             self.positive(&scaffold, "thickness", values)?;

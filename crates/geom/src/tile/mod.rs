@@ -39,6 +39,7 @@ mod lattice;
 mod local;
 mod planar;
 mod scaffold;
+mod shape;
 mod simplex;
 mod skin;
 mod square;
@@ -51,6 +52,7 @@ use crate::element::Element3;
 use crate::field::{ScalarField, Solid};
 use crate::mesh::{Mesh, MeshChunk};
 use lattice::{Lattice, Weights};
+use shape::{Order, Shape};
 use weld::{Corners, Locals, Welder};
 
 pub use cube::HEX_CORNERS;
@@ -59,6 +61,7 @@ pub use planar::{
     thickness_normal, tile_planar, tile_surface_scaffold,
 };
 pub use scaffold::{reference_element, tile_scaffold};
+pub use shape::Nodes;
 pub use skin::{Skin, stream_scaffold, tile_scaffold_with_skin};
 
 /// The isoparametric maps of a scaffold's elements.
@@ -72,6 +75,9 @@ pub trait ElementMap: Sync {
 pub struct Elements<'a> {
     pub shape: Element3,
     pub corners: &'a [u32],
+    /// Every node of each element (its corners first, as in `corners`): nodal values are
+    /// interpolated by the shape functions of `nodes.kind` through all of them.
+    pub nodes: Nodes<'a>,
     pub map: &'a dyn ElementMap,
 }
 
@@ -128,14 +134,52 @@ pub enum TileError {
     /// What the receiver of a streamed tiling's chunks reported.
     #[error("{0}")]
     Sink(String),
+    #[error("the element nodes do not fit the elements: {0}")]
+    Nodes(String),
+    #[error(
+        "the graded thickness must be greater than 0, but it interpolates to {} inside element {element}: its shape functions overshoot between nodal values that vary sharply across it; smooth the thickness or refine the scaffold there",
+        f64::from_bits(*.value_bits)
+    )]
+    Thickness {
+        /// The element's tag when tiled from a [`crate::scaffold::Scaffold`], else its index.
+        element: u64,
+        /// The lowest interpolated value in it, as bits (keeping the error `Eq`).
+        value_bits: u64,
+    },
+}
+
+impl TileError {
+    /// The error with element indices replaced by the scaffold's element tags.
+    pub(crate) fn tagged(self, tags: &[u64]) -> TileError {
+        match self {
+            TileError::Thickness {
+                element,
+                value_bits,
+            } => TileError::Thickness {
+                element: usize::try_from(element)
+                    .ok()
+                    .and_then(|e| tags.get(e))
+                    .copied()
+                    .unwrap_or(element),
+                value_bits,
+            },
+            other => other,
+        }
+    }
 }
 
 /// What is tiled into every element: a cell (or a transition between two), in reference
 /// coordinates and with the element's symmetry, seen through a solid whose thickness or offset
-/// may be graded. Nodal arrays are indexed by global node id (the ids in
-/// [`Elements::corners`]) and interpolated with the element's corner (linear) shape functions,
-/// which on a face involve only that face's corners: graded values are continuous across
-/// faces, and bitwise equal on them.
+/// may be graded. Nodal arrays are indexed by global node id (the ids in [`Elements::nodes`])
+/// and interpolated by the element's own shape functions through all its nodes (quadratic for
+/// tet10, hex20, hex27, tri6, quad8, quad9), which on a face involve only that face's nodes:
+/// graded values are continuous across faces, and bitwise equal on them ([`shape`]).
+///
+/// A quadratic interpolant may leave the range of its nodal values. Transition weights are
+/// therefore clamped to [0, 1] at every lattice point, after interpolation; a graded thickness
+/// that interpolates to ≤ 0 at a lattice point is an error naming the element
+/// ([`TileError::Thickness`]): a shell that silently vanishes, or is clamped to a sliver, where
+/// the user asked for a positive thickness is a defect they would only find in the print.
 pub struct TiledSolid<'a> {
     /// The cell field, and a second one for a transition.
     pub cell: &'a dyn ScalarField,
@@ -147,7 +191,9 @@ pub struct TiledSolid<'a> {
     pub offset: Option<&'a [f64]>,
 }
 
-/// `Φ = (1 − w) Φ_cell + w Φ_to`, with `w` the weight of `to` at each node.
+/// `Φ = (1 − w) Φ_cell + w Φ_to`, with `w` the weight of `to` given at each node, interpolated
+/// and then clamped to [0, 1] (so nodal weights outside [0, 1] are the clamp of their
+/// interpolant, not an interpolant of clamped values).
 pub struct Transition<'a> {
     pub to: &'a dyn ScalarField,
     pub weight: &'a [f64],
@@ -199,13 +245,9 @@ fn tile_with(
     skin: Option<&Skin>,
     resolution: usize,
 ) -> Result<(Mesh, TileStats), TileError> {
-    check_input(elements.corners, elements.corner_count(), solid, resolution)?;
-    tile_on(
-        elements,
-        lattice_of(elements.shape, resolution).as_ref(),
-        solid,
-        skin,
-    )
+    check_elements(elements, solid, resolution)?;
+    let lattice = lattice_of(elements.shape, resolution);
+    tile_on(elements, elements.nodes, lattice.as_ref(), solid, skin)
 }
 
 /// [`tile_with`], handing the mesh to `sink` a chunk of `chunk_elements` elements at a time.
@@ -217,15 +259,39 @@ fn stream_with(
     chunk_elements: usize,
     sink: &mut ChunkSink,
 ) -> Result<TileStats, TileError> {
-    check_input(elements.corners, elements.corner_count(), solid, resolution)?;
+    check_elements(elements, solid, resolution)?;
     let lattice = lattice_of(elements.shape, resolution);
+    let nodes = elements.nodes;
     stream_on(
         elements,
+        nodes,
         lattice.as_ref(),
         solid,
         skin,
         chunk_elements,
         sink,
+    )
+}
+
+/// The elements' node lists against their shape, then [`check_input`].
+fn check_elements(
+    elements: &Elements,
+    solid: &TiledSolid,
+    resolution: usize,
+) -> Result<(), TileError> {
+    if reference_element(elements.nodes.kind) != Some(elements.shape) {
+        return Err(TileError::Nodes(format!(
+            "{} nodes on {:?} elements",
+            elements.nodes.kind.name(),
+            elements.shape
+        )));
+    }
+    check_input(
+        elements.corners,
+        elements.corner_count(),
+        &elements.nodes,
+        solid,
+        resolution,
     )
 }
 
@@ -237,10 +303,11 @@ fn lattice_of(shape: Element3, resolution: usize) -> Box<dyn Lattice> {
 }
 
 /// The checks every tiling makes before it starts: the resolution, the corner list's length,
-/// and nodal arrays long enough for every node the corners name.
+/// the node lists against it, and nodal arrays long enough for every node they name.
 fn check_input(
     corners: &[u32],
     per_element: usize,
+    nodes: &Nodes,
     solid: &TiledSolid,
     resolution: usize,
 ) -> Result<(), TileError> {
@@ -256,7 +323,8 @@ fn check_input(
             per_element,
         });
     }
-    let nodes = corners.iter().map(|&c| c as usize + 1).max().unwrap_or(0);
+    shape::check_nodes(corners, per_element, nodes).map_err(TileError::Nodes)?;
+    let nodes = nodes.ids.iter().map(|&c| c as usize + 1).max().unwrap_or(0);
     for (what, values) in solid.nodal() {
         if values.len() < nodes {
             return Err(TileError::NodalValues {
@@ -273,17 +341,26 @@ fn check_input(
 /// docs), whatever the element's dimension, as one mesh.
 fn tile_on(
     elements: &dyn Corners,
+    nodes: Nodes,
     lattice: &dyn Lattice,
     solid: &TiledSolid,
     skin: Option<&Skin>,
 ) -> Result<(Mesh, TileStats), TileError> {
     let mut mesh = Mesh::default();
-    let stats = stream_on(elements, lattice, solid, skin, usize::MAX, &mut |chunk| {
-        // One chunk holds every element: its arrays are the mesh.
-        mesh.vertices = chunk.vertices;
-        mesh.triangles = chunk.triangles;
-        Ok(())
-    })?;
+    let stats = stream_on(
+        elements,
+        nodes,
+        lattice,
+        solid,
+        skin,
+        usize::MAX,
+        &mut |chunk| {
+            // One chunk holds every element: its arrays are the mesh.
+            mesh.vertices = chunk.vertices;
+            mesh.triangles = chunk.triangles;
+            Ok(())
+        },
+    )?;
     Ok((mesh, stats))
 }
 
@@ -295,6 +372,7 @@ pub type ChunkSink<'s> = dyn FnMut(MeshChunk) -> Result<(), String> + 's;
 /// and the vertices open between chunks.
 fn stream_on(
     elements: &dyn Corners,
+    nodes: Nodes,
     lattice: &dyn Lattice,
     solid: &TiledSolid,
     skin: Option<&Skin>,
@@ -315,7 +393,7 @@ fn stream_on(
         }
         return Ok(welder.stats());
     }
-    let samples = ElementSamples::new(lattice, solid, cell).with_skin(skin);
+    let samples = ElementSamples::new(lattice, solid, cell, nodes)?.with_skin(skin);
     for k in 0..chunks {
         let range = k * per_chunk..((k + 1) * per_chunk).min(count);
         let locals: Vec<local::LocalMesh> = range
@@ -323,7 +401,7 @@ fn stream_on(
             .map_init(
                 || vec![f64::NAN; lattice.index_len()],
                 |values, e| {
-                    samples.fill(elements.element(e), values);
+                    samples.fill(e, values);
                     lattice.contour(values)
                 },
             )
@@ -341,19 +419,54 @@ pub fn chunk_elements_for(resolution: usize, triangles: usize) -> usize {
 }
 
 /// The samples of a graded or transition solid in one element, from the symmetric reference
-/// samples of its cells and the nodal values at the element's corners.
+/// samples of its cells and the nodal values at all the element's nodes.
 struct ElementSamples<'s> {
     solid: &'s TiledSolid<'s>,
     skin: Option<&'s Skin>,
     cell: Vec<f64>,
     to: Option<Vec<f64>>,
-    /// Per lattice index: the point's corner weights (None off the lattice).
-    weights: Vec<Option<Weights>>,
+    nodes: Nodes<'s>,
+    shape: Shape,
+    /// The lattice points, in index order.
+    points: Vec<SamplePoint>,
+    /// How far below its nodal values an interpolant can reach ([`Shape::undershoot`]).
+    undershoot: f64,
+}
+
+/// A lattice point: its index, corner weights (naming it, and placing the skin term) and
+/// integer coordinates (for the shape-function numerators).
+struct SamplePoint {
+    index: u32,
+    weights: Weights,
+    at: shape::Point,
 }
 
 impl<'s> ElementSamples<'s> {
-    fn new(lattice: &dyn Lattice, solid: &'s TiledSolid<'s>, cell: Vec<f64>) -> Self {
-        ElementSamples {
+    /// The samples over `nodes`; an error if a graded thickness interpolates to ≤ 0 anywhere.
+    fn new(
+        lattice: &dyn Lattice,
+        solid: &'s TiledSolid<'s>,
+        cell: Vec<f64>,
+        nodes: Nodes<'s>,
+    ) -> Result<Self, TileError> {
+        let weights: Vec<(u32, Weights)> = (0..lattice.index_len() as u32)
+            .filter(|&p| lattice.is_point(p))
+            .map(|p| (p, lattice.weights(p)))
+            .collect();
+        let shape = match weights.first() {
+            Some((_, w)) => Shape::from_weights(nodes.kind, w),
+            None => Shape::new(nodes.kind, 1),
+        };
+        let points: Vec<SamplePoint> = weights
+            .into_iter()
+            .map(|(index, weights)| SamplePoint {
+                index,
+                weights,
+                at: shape.point(&weights),
+            })
+            .collect();
+        let undershoot = shape.undershoot(points.iter().map(|p| p.at));
+        let samples = ElementSamples {
             solid,
             skin: None,
             cell,
@@ -361,10 +474,13 @@ impl<'s> ElementSamples<'s> {
                 .transition
                 .as_ref()
                 .map(|t| symmetric_samples(lattice, t.to)),
-            weights: (0..lattice.index_len() as u32)
-                .map(|p| lattice.is_point(p).then(|| lattice.weights(p)))
-                .collect(),
-        }
+            nodes,
+            shape,
+            points,
+            undershoot,
+        };
+        samples.check_thickness()?;
+        Ok(samples)
     }
 
     /// The same samples, with the skin term.
@@ -372,42 +488,110 @@ impl<'s> ElementSamples<'s> {
         ElementSamples { skin, ..self }
     }
 
-    /// The samples of the element with corner nodes `corners` into `values`.
-    fn fill(&self, corners: &[u32], values: &mut [f64]) {
-        let solid = self.solid;
-        let skin = self.skin.filter(|s| !s.is_far(corners));
-        for (p, w) in self.weights.iter().enumerate() {
-            let Some(w) = w else { continue };
-            let at = |nodal: &[f64]| interpolate(corners, w, nodal);
-            let mut phi = self.cell[p];
-            if let (Some(t), Some(to)) = (&solid.transition, &self.to) {
-                let w = at(t.weight);
-                phi = (1.0 - w) * phi + w * to[p];
-            }
-            let graded = graded_solid(solid.solid, solid.thickness.map(at), solid.offset.map(at));
-            values[p] = graded.apply(phi);
-            if let Some(skin) = skin {
-                values[p] = skin.apply(values[p], corners, w);
-            }
+    /// Calls `visit(point, numerators)` for every lattice point, with the numerators of
+    /// element `e`'s nodes in the order of `order`.
+    fn for_each_point(&self, order: &Order, mut visit: impl FnMut(&SamplePoint, &[i64])) {
+        let mut local = [0i64; shape::MAX_NODES];
+        for point in &self.points {
+            self.shape.numerators(&point.at, &mut local);
+            let sorted = order.arrange(&local);
+            visit(point, &sorted[..order.len()]);
         }
     }
-}
 
-/// A nodal value at a lattice point: `Σ W_c v(node_c) / Σ W_c` over the point's corner
-/// weights, summed in increasing node order so both elements sharing a face compute the same
-/// bits there.
-fn interpolate(corners: &[u32], weights: &Weights, nodal: &[f64]) -> f64 {
-    let mut terms = [(u32::MAX, 0u32); lattice::MAX_CORNERS];
-    let list = weights.as_slice();
-    for (slot, &(c, w)) in terms.iter_mut().zip(list) {
-        *slot = (corners[c as usize], w);
+    /// A graded thickness must stay > 0 at every sample (what [`TiledSolid`] promises):
+    /// the lowest element where it does not is the error.
+    fn check_thickness(&self) -> Result<(), TileError> {
+        let Some(thickness) = self.solid.thickness else {
+            return Ok(());
+        };
+        if !matches!(
+            self.solid.solid,
+            Solid::Shell { .. } | Solid::EccentricShell { .. }
+        ) {
+            return Ok(());
+        }
+        let denominator = self.shape.denominator();
+        let lowest = |e: usize| {
+            let nodes = self.nodes.element(e);
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            for &n in nodes {
+                // NaN compares false, so leaves `lo` NaN and fails the bound below.
+                let t = thickness[n as usize];
+                lo = if t < lo || t.is_nan() { t } else { lo };
+                hi = hi.max(t);
+            }
+            // Every interpolant is ≥ lo − (hi − lo)·undershoot: most elements need no sample
+            // pass. The margin dwarfs the sums' rounding (~1e-15 relative).
+            if lo > 0.0 && lo - (hi - lo) * self.undershoot > 1e-9 * hi {
+                return lo;
+            }
+            let order = Order::of(nodes);
+            let values = order.gather(nodes, thickness);
+            let mut lowest = f64::INFINITY;
+            self.for_each_point(&order, |_, n| {
+                let t = shape::interpolate(n, &values, denominator);
+                // A NaN is no thickness either, and stays the answer once found.
+                if !lowest.is_nan() && (t.is_nan() || t < lowest) {
+                    lowest = t;
+                }
+            });
+            lowest
+        };
+        let bad = (0..self.nodes.count())
+            .into_par_iter()
+            .map(|e| (e, lowest(e)))
+            // NaN fails too.
+            .find_first(|&(_, t)| t.is_nan() || t <= 0.0);
+        match bad {
+            Some((e, t)) => Err(TileError::Thickness {
+                element: e as u64,
+                value_bits: t.to_bits(),
+            }),
+            None => Ok(()),
+        }
     }
-    let terms = &mut terms[..list.len()];
-    terms.sort_unstable();
-    let (sum, total) = terms.iter().fold((0.0, 0u32), |(s, t), &(node, w)| {
-        (s + f64::from(w) * nodal[node as usize], t + w)
-    });
-    sum / f64::from(total)
+
+    /// The samples of element `e` into `values`.
+    fn fill(&self, e: usize, values: &mut [f64]) {
+        let solid = self.solid;
+        let nodes = self.nodes.element(e);
+        let corners = &nodes[..self.shape.corner_count()];
+        let skin = self.skin.filter(|s| !s.is_far(corners));
+        let order = Order::of(nodes);
+        // Missing arrays are interpolated as zeros and not used.
+        let gather = |nodal: Option<&[f64]>| {
+            nodal.map_or([0.0; shape::MAX_NODES], |v| order.gather(nodes, v))
+        };
+        let arrays = [
+            gather(solid.transition.as_ref().map(|t| t.weight)),
+            gather(solid.thickness),
+            gather(solid.offset),
+        ];
+        let arrays = [&arrays[0][..], &arrays[1][..], &arrays[2][..]];
+        let denominator = self.shape.denominator();
+        self.for_each_point(&order, |point, n| {
+            let p = point.index as usize;
+            // Σ nᵢ vᵢ / D in increasing global node order: the same bits from every element
+            // sharing the point.
+            let [weight, thickness, offset] = shape::interpolate_each(n, &arrays, denominator);
+            let mut phi = self.cell[p];
+            if let Some(to) = &self.to {
+                // The quadratic interpolant may leave [0, 1] between nodal weights.
+                let w = weight.clamp(0.0, 1.0);
+                phi = (1.0 - w) * phi + w * to[p];
+            }
+            let graded = graded_solid(
+                solid.solid,
+                solid.thickness.map(|_| thickness),
+                solid.offset.map(|_| offset),
+            );
+            values[p] = graded.apply(phi);
+            if let Some(skin) = skin {
+                values[p] = skin.apply(values[p], corners, &point.weights);
+            }
+        });
+    }
 }
 
 /// The solid with its thickness or offset replaced by graded values where given.

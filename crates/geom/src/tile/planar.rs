@@ -40,7 +40,7 @@ use super::lattice::Lattice;
 use super::square::SquareLattice;
 use super::triangle::TriangleLattice;
 use super::weld::Corners;
-use super::{ElementMap, TileError, TileStats, TiledSolid, check_input, tile_on};
+use super::{ElementMap, Nodes, TileError, TileStats, TiledSolid, check_input, tile_on};
 use crate::contour2d::{Element2, boundary_loops};
 use crate::mesh::Mesh;
 use crate::scaffold::{ElementKind, Scaffold};
@@ -50,6 +50,9 @@ use crate::scaffold::{ElementKind, Scaffold};
 pub struct Elements2<'a> {
     pub shape: Element2,
     pub corners: &'a [u32],
+    /// Every node of each element (its corners first, as in `corners`): nodal values are
+    /// interpolated by the shape functions of `nodes.kind` through all of them.
+    pub nodes: Nodes<'a>,
     pub map: &'a dyn ElementMap,
 }
 
@@ -84,12 +87,25 @@ pub fn tile_planar(
     solid: &TiledSolid,
     resolution: usize,
 ) -> Result<(Mesh, TileStats), TileError> {
-    check_input(elements.corners, elements.corner_count(), solid, resolution)?;
+    if surface_element(elements.nodes.kind) != Some(elements.shape) {
+        return Err(TileError::Nodes(format!(
+            "{} nodes on {:?} elements",
+            elements.nodes.kind.name(),
+            elements.shape
+        )));
+    }
+    check_input(
+        elements.corners,
+        elements.corner_count(),
+        &elements.nodes,
+        solid,
+        resolution,
+    )?;
     let lattice: Box<dyn Lattice> = match elements.shape {
         Element2::Square => Box::new(SquareLattice::new(resolution)),
         Element2::Triangle => Box::new(TriangleLattice::new(resolution)),
     };
-    tile_on(elements, lattice.as_ref(), solid, None)
+    tile_on(elements, elements.nodes, lattice.as_ref(), solid, None)
 }
 
 /// The reference element of a 2D element kind.
@@ -249,9 +265,14 @@ pub fn tile_surface_scaffold(
     let elements = Elements2 {
         shape,
         corners: &corners,
+        nodes: Nodes {
+            kind: scaffold.kind,
+            ids: &scaffold.connectivity,
+        },
         map: scaffold,
     };
-    let (mut mesh, stats) = tile_planar(&elements, solid, resolution)?;
+    let (mut mesh, stats) =
+        tile_planar(&elements, solid, resolution).map_err(|e| e.tagged(&scaffold.element_tags))?;
     if let Some(z) = plane {
         for v in &mut mesh.vertices {
             v[2] = z as f32;
@@ -425,9 +446,13 @@ pub fn thickness_normal(
         let elements = Elements2 {
             shape,
             corners: &corners,
+            nodes: Nodes {
+                kind: scaffold.kind,
+                ids: &scaffold.connectivity,
+            },
             map: &map,
         };
-        tile_planar(&elements, solid, resolution)
+        tile_planar(&elements, solid, resolution).map_err(|e| e.tagged(&scaffold.element_tags))
     };
     let (mid, stats) = tile_at(0.0)?;
     let (top, _) = tile_at(0.5 * h)?;

@@ -5,7 +5,7 @@
 use super::super::lattice::Lattice;
 use super::super::square::SquareLattice;
 use super::super::triangle::TriangleLattice;
-use super::super::{ElementSamples, TiledSolid, Transition, symmetric_samples};
+use super::super::{ElementSamples, Nodes, TiledSolid, Transition, symmetric_samples};
 use crate::field::{ScalarField, Solid};
 use crate::scaffold::read_scaffold;
 use std::collections::HashMap;
@@ -86,14 +86,20 @@ fn shared_edge_samples_are_bitwise_equal_from_both_sides() {
             Box::new(SquareLattice::new(resolution))
         };
         let lattice = lattice.as_ref();
-        let samples = ElementSamples::new(lattice, &solid, symmetric_samples(lattice, &waves));
+        let nodes = Nodes {
+            kind: scaffold.kind,
+            ids: &scaffold.connectivity,
+        };
+        let samples =
+            ElementSamples::new(lattice, &solid, symmetric_samples(lattice, &waves), nodes)
+                .unwrap_or_else(|e| panic!("{file}: {e}"));
         let (per, corners) = (scaffold.kind.node_count(), scaffold.kind.corner_count());
         let mut seen: HashMap<Vec<(u32, u32)>, (u64, usize)> = HashMap::new();
         let mut values = vec![f64::NAN; lattice.index_len()];
         let (mut compared, mut points) = (0usize, 0usize);
         for (e, element) in scaffold.connectivity.chunks_exact(per).enumerate() {
             let corner_nodes = &element[..corners];
-            samples.fill(corner_nodes, &mut values);
+            samples.fill(e, &mut values);
             for q in (0..lattice.index_len() as u32).filter(|&q| lattice.is_point(q)) {
                 let w = lattice.weights(q);
                 if !lattice.face_masks().iter().any(|&f| w.mask() & !f == 0) {

@@ -4,7 +4,7 @@
 //! Invariant: only volume scaffolds (tet4/tet10, hex8/hex20/hex27) are tiled here; the first
 //! `corner_count` nodes of every kind are its corners in the reference element's order.
 
-use super::{ElementMap, Elements, TileError, TileStats, TiledSolid, tile};
+use super::{ElementMap, Elements, Nodes, TileError, TileStats, TiledSolid, tile};
 use crate::element::Element3;
 use crate::mesh::Mesh;
 use crate::scaffold::{ElementKind, Scaffold};
@@ -31,7 +31,7 @@ pub fn tile_scaffold(
     resolution: usize,
 ) -> Result<(Mesh, TileStats), TileError> {
     let ordered = Ordered::new(scaffold)?;
-    tile(&ordered.elements(), solid, resolution)
+    tile(&ordered.elements(), solid, resolution).map_err(|e| ordered.tagged(e))
 }
 
 /// A volume scaffold's elements in the order they are tiled: along a Morton (Z-order) curve
@@ -46,6 +46,8 @@ pub(super) struct Ordered<'s> {
     order: Vec<u32>,
     /// Corner nodes, element by element in tiling order.
     corners: Vec<u32>,
+    /// Every node (corners first), element by element in tiling order.
+    nodes: Vec<u32>,
 }
 
 impl<'s> Ordered<'s> {
@@ -58,11 +60,16 @@ impl<'s> Ordered<'s> {
             .iter()
             .flat_map(|&e| scaffold.element(e as usize)[..corners_per].iter().copied())
             .collect();
+        let nodes = order
+            .iter()
+            .flat_map(|&e| scaffold.element(e as usize).iter().copied())
+            .collect();
         Ok(Ordered {
             scaffold,
             shape,
             order,
             corners,
+            nodes,
         })
     }
 
@@ -70,8 +77,28 @@ impl<'s> Ordered<'s> {
         Elements {
             shape: self.shape,
             corners: &self.corners,
+            nodes: Nodes {
+                kind: self.scaffold.kind,
+                ids: &self.nodes,
+            },
             map: self,
         }
+    }
+
+    /// The error with tiling positions replaced by the scaffold's element tags.
+    pub(super) fn tagged(&self, error: TileError) -> TileError {
+        let tags: Vec<u64> = self
+            .order
+            .iter()
+            .map(|&e| {
+                self.scaffold
+                    .element_tags
+                    .get(e as usize)
+                    .copied()
+                    .unwrap_or(u64::from(e))
+            })
+            .collect();
+        error.tagged(&tags)
     }
 }
 

@@ -177,7 +177,7 @@ pub fn tile_scaffold_with_skin(
     };
     let ordered = Ordered::new(scaffold)?;
     let skin = Skin::new(scaffold, thickness, resolution)?;
-    tile_with(&ordered.elements(), solid, Some(&skin), resolution)
+    tile_with(&ordered.elements(), solid, Some(&skin), resolution).map_err(|e| ordered.tagged(e))
 }
 
 /// [`tile_scaffold_with_skin`], handing the mesh to `sink` a chunk of `chunk_elements` elements
@@ -205,4 +205,5 @@ pub fn stream_scaffold(
         chunk_elements,
         sink,
     )
+    .map_err(|e| ordered.tagged(e))
 }

@@ -356,14 +356,19 @@ fn shared_face_samples_are_bitwise_equal_from_both_sides() {
             Element3::Tetrahedron => Box::new(simplex::TetLattice::new(resolution)),
         };
         let lattice = lattice.as_ref();
-        let samples = ElementSamples::new(lattice, &solid, symmetric_samples(lattice, &p));
+        let nodes = Nodes {
+            kind: scaffold.kind,
+            ids: &scaffold.connectivity,
+        };
+        let samples = ElementSamples::new(lattice, &solid, symmetric_samples(lattice, &p), nodes)
+            .unwrap_or_else(|e| panic!("{file}: {e}"));
         let (per, corners) = (scaffold.kind.node_count(), scaffold.kind.corner_count());
         let mut seen: HashMap<Vec<(u32, u32)>, (u64, usize)> = HashMap::new();
         let mut values = vec![f64::NAN; lattice.index_len()];
         let (mut compared, mut faces_seen) = (0usize, 0usize);
         for (e, element) in scaffold.connectivity.chunks_exact(per).enumerate() {
             let corner_nodes = &element[..corners];
-            samples.fill(corner_nodes, &mut values);
+            samples.fill(e, &mut values);
             for q in 0..lattice.index_len() as u32 {
                 if !lattice.is_point(q) {
                     continue;
