@@ -253,15 +253,27 @@ impl<R: ReadAt> fmt::Debug for ChunkedMesh<R> {
 }
 
 impl<R: ReadAt> ChunkedMesh<R> {
+    /// Where the payload is read from.
+    pub fn source(&self) -> &R {
+        &self.source
+    }
+
     /// Reads and verifies the trailer and the chunk table; no chunk is read.
     pub fn open(source: R) -> io::Result<ChunkedMesh<R>> {
         let len = source.payload_len();
         let magic_len = CHUNKED_MAGIC.len() as u64;
-        if len < magic_len + TAIL_BYTES || !is_chunked(&source)? {
+        if len < magic_len + TAIL_BYTES
+            || !is_chunked(&source).map_err(|e| corrupt(format!("reading the magic: {e}")))?
+        {
             return Err(corrupt("no chunked mesh magic"));
         }
+        let read = |at: u64, buf: &mut [u8]| {
+            source
+                .read_at(at, buf)
+                .map_err(|e| corrupt(format!("reading the trailer: {e}")))
+        };
         let mut tail = [0u8; TAIL_BYTES as usize];
-        source.read_at(len - TAIL_BYTES, &mut tail)?;
+        read(len - TAIL_BYTES, &mut tail)?;
         let (hash, json_len) = tail.split_at(32);
         let json_len = u64::from_le_bytes(json_len.try_into().map_err(|_| corrupt("tail"))?);
         let trailer_at = (len - TAIL_BYTES)
@@ -269,7 +281,7 @@ impl<R: ReadAt> ChunkedMesh<R> {
             .filter(|&at| at >= magic_len)
             .ok_or_else(|| corrupt("trailer length"))?;
         let mut json = vec![0u8; json_len as usize];
-        source.read_at(trailer_at, &mut json)?;
+        read(trailer_at, &mut json)?;
         if ContentHash::of(&json).as_bytes() != hash {
             return Err(corrupt("trailer does not match its hash"));
         }
@@ -310,7 +322,9 @@ impl<R: ReadAt> ChunkedMesh<R> {
         out.clear();
         out.resize(bytes / size, T::zeroed());
         let buf: &mut [u8] = bytemuck::cast_slice_mut(out.as_mut_slice());
-        self.source.read_at(bounds[s], buf)?;
+        self.source
+            .read_at(bounds[s], buf)
+            .map_err(|e| corrupt(format!("reading chunk {k}: {e}")))?;
         if ContentHash::of(buf) != entry.hashes[s] {
             return Err(corrupt(format!(
                 "section {s} of chunk {k} does not match its hash"
