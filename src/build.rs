@@ -462,14 +462,40 @@ impl<'a> Builder<'a> {
         }
         // The entry went bad between lookup and load: run the node again (deterministic, so
         // its hash and everything keyed on it stay the same).
+        let why = "its cache entry was corrupt or gone when its payload was needed";
+        self.rerun(id, why.into(), store_mesh)?;
+        Ok(())
+    }
+
+    /// Runs node `id` again (its inputs loaded first), stores and records it as run for
+    /// `why`; returns its hash.
+    fn rerun(
+        &mut self,
+        id: NodeId,
+        why: String,
+        store_mesh: &mut StoreMesh,
+    ) -> Result<ContentHash, BuildError> {
+        let key = self.resolved[&id].key;
+        let started = Instant::now();
         for input in self.graph.nodes[id].inputs.clone() {
             self.load(input, store_mesh)?;
         }
         let value = self.execute(id, &key);
         let value = self.fail_on(id, value)?;
-        self.store(&key, &value, store_mesh)?;
+        let hash = self.store(&key, &value, store_mesh)?;
         self.resolved.get_mut(&id).expect("resolved").value = Some(value);
-        Ok(())
+        let node = &self.graph.nodes[id];
+        self.runs.insert(
+            id,
+            NodeRun {
+                node: node.name.clone(),
+                stage: node.stage.kind(),
+                cached: false,
+                seconds: started.elapsed().as_secs_f64(),
+                why: vec![why],
+            },
+        );
+        Ok(hash)
     }
 
     /// The value of a run, or the build error naming node `id`.
@@ -498,14 +524,8 @@ impl<'a> Builder<'a> {
         let key = self.resolved[&id].key;
         self.cache.remove(&key)?;
         self.resolved.get_mut(&id).expect("resolved").value = None;
-        let started = Instant::now();
-        for input in self.graph.nodes[id].inputs.clone() {
-            self.load(input, store_mesh)?;
-        }
-        let value = self.execute(id, &key);
-        let value = self.fail_on(id, value)?;
-        let hash = self.store(&key, &value, store_mesh)?;
-        if hash != self.resolved[&id].hash {
+        let why = format!("its cache entry was corrupt ({reason})");
+        if self.rerun(id, why, store_mesh)? != self.resolved[&id].hash {
             return Err(BuildError::Stage {
                 node: self.graph.nodes[id].name.clone(),
                 message: "rebuilt after its cache entry was corrupt, it made different bytes \
@@ -513,18 +533,6 @@ impl<'a> Builder<'a> {
                     .into(),
             });
         }
-        self.resolved.get_mut(&id).expect("resolved").value = Some(value);
-        let node = &self.graph.nodes[id];
-        self.runs.insert(
-            id,
-            NodeRun {
-                node: node.name.clone(),
-                stage: node.stage.kind(),
-                cached: false,
-                seconds: started.elapsed().as_secs_f64(),
-                why: vec![format!("its cache entry was corrupt ({reason})")],
-            },
-        );
         Ok(())
     }
 
