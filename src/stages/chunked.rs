@@ -296,8 +296,8 @@ impl<R: ReadAt> ChunkedMesh<R> {
                 .filter(|_| chunk.offset == at && u64::from(chunk.first_vertex) == vertices)
                 .ok_or_else(|| corrupt(format!("chunk {k} is out of place")))?;
             at = sections[4];
-            vertices = vertices.checked_add(chunk.vertices).unwrap_or(u64::MAX);
-            triangles = triangles.checked_add(chunk.triangles).unwrap_or(u64::MAX);
+            vertices = vertices.saturating_add(chunk.vertices);
+            triangles = triangles.saturating_add(chunk.triangles);
         }
         if at != trailer_at || vertices != trailer.vertices || triangles != trailer.triangles {
             return Err(corrupt("the chunk table does not add up"));

@@ -8,13 +8,15 @@
 //! - Indexed formats (PLY, OBJ, OFF, VTK) read the chunks twice, vertices then triangles
 //!   ([`Pass::Vertices`], [`Pass::Triangles`]); STL reads them once ([`Pass::Facets`]), taking
 //!   positions from each chunk ([`MeshChunk::position`]).
-//! - A chunk is checked before any of its bytes are written: finite coordinates, indices in
-//!   range (for STL: resolvable from the chunk's own and borrowed vertices), ids dense.
+//! - A chunk is checked before any of its bytes are written — finite coordinates, indices in
+//!   range, ids dense — but for STL's corners, which are resolved from the chunk's own and
+//!   borrowed vertices while encoding: one that does not resolve fails the call after the
+//!   chunk's bytes. Either way a bad chunk fails the call and the caller discards the output.
 
 use super::{Encoding, Format, check_finite, check_indices, obj, off, ply, stl, vtk};
 use crate::mesh::MeshChunk;
-use rayon::prelude::*;
 use std::io::{self, Write};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Which arrays of each chunk a pass reads. A source may leave the others empty (but always
 /// sets `first_vertex`), so a pass over triangles need not read vertices from disk.
@@ -74,14 +76,37 @@ pub fn write_chunked(
     match format {
         Format::Stl => {
             stl::header(nt, encoding, out)?;
-            facets(source, nt, &mut |chunk| {
+            facets(source, nt, &mut |chunk, done| {
+                let positions = Positions::of(chunk);
+                // Resolved once, while encoding (a separate check doubled the cost of the
+                // random lookups of borrowed ids); a miss fails the call after this chunk's
+                // bytes, which the caller discards with the rest of the partial file.
+                let missing = AtomicBool::new(false);
                 stl::facets(
                     &chunk.triangles,
-                    // Every index resolves: `facets` checked the chunk.
-                    |i| chunk.position(i).unwrap_or_default(),
+                    |i| {
+                        positions.get(i).unwrap_or_else(|| {
+                            missing.store(true, Ordering::Relaxed);
+                            [0.0; 3]
+                        })
+                    },
                     encoding,
                     out,
-                )
+                )?;
+                if missing.load(Ordering::Relaxed) {
+                    let resolves = |tri: &[u32; 3]| tri.iter().all(|&i| positions.get(i).is_some());
+                    let t = chunk
+                        .triangles
+                        .iter()
+                        .position(|tri| !resolves(tri))
+                        .unwrap_or(0);
+                    return Err(invalid(format!(
+                        "triangle {} {:?} uses a vertex its chunk neither has nor borrows",
+                        done + t as u64,
+                        chunk.triangles.get(t).copied().unwrap_or_default()
+                    )));
+                }
+                Ok(())
             })?;
             stl::footer(encoding, out)?;
         }
@@ -160,12 +185,13 @@ fn triangles(
     Ok(())
 }
 
-/// The facet pass: each chunk whole, its own and borrowed positions finite and every corner
-/// resolvable, adding up to `nt` triangles.
+/// The facet pass: each chunk whole, its own and borrowed positions finite, adding up to `nt`
+/// triangles; `write` gets the chunk and the number of triangles before it (and resolves
+/// the corners).
 fn facets(
     source: &dyn ChunkSource,
     nt: u64,
-    write: &mut dyn FnMut(&MeshChunk) -> io::Result<()>,
+    write: &mut dyn FnMut(&MeshChunk, u64) -> io::Result<()>,
 ) -> io::Result<()> {
     let mut done = 0u64;
     let mut next = 0u64;
@@ -178,29 +204,84 @@ fn facets(
         }
         next += chunk.vertices.len() as u64;
         check_finite(&chunk.vertices, u64::from(chunk.first_vertex))?;
-        for &(id, p) in &chunk.borrowed {
+        // One fold, not a check per entry: a chunk may borrow a million positions.
+        let finite = |p: &[f32; 3]| p.iter().all(|c| c.is_finite());
+        if let Some(&(id, p)) = chunk.borrowed.iter().find(|(_, p)| !finite(p)) {
             check_finite(&[p], u64::from(id))?;
         }
-        let resolves = |tri: &[u32; 3]| tri.iter().all(|&i| chunk.position(i).is_some());
-        if !chunk.triangles.par_iter().all(resolves)
-            && let Some(t) = chunk.triangles.iter().position(|tri| !resolves(tri))
-        {
-            return Err(invalid(format!(
-                "triangle {} {:?} uses a vertex its chunk neither has nor borrows",
-                done + t as u64,
-                chunk.triangles[t]
-            )));
-        }
+        let before = done;
         done += chunk.triangles.len() as u64;
         if done > nt {
             return Err(count_mismatch("triangles", nt, done));
         }
-        write(chunk)
+        write(chunk, before)
     })?;
     if done != nt {
         return Err(count_mismatch("triangles", nt, done));
     }
     Ok(())
+}
+
+/// A chunk's positions by id: its own vertices by index, borrowed ones through an
+/// open-addressing table over the borrowed list. A binary search there made STL writing 4×
+/// slower than from a whole mesh: a tiling's chunk borrows up to a million seam vertices, and
+/// a search misses the cache at every step; a table lookup misses about once.
+struct Positions<'a> {
+    first: u32,
+    own: &'a [[f32; 3]],
+    borrowed: &'a [(u32, [f32; 3])],
+    /// Index + 1 into `borrowed`, 0 for an empty slot; a power of two long, at most half full.
+    slots: Vec<u32>,
+    shift: u32,
+}
+
+impl<'a> Positions<'a> {
+    fn of(chunk: &'a MeshChunk) -> Positions<'a> {
+        let borrowed = chunk.borrowed.as_slice();
+        let bits = (2 * borrowed.len())
+            .max(16)
+            .next_power_of_two()
+            .trailing_zeros();
+        let mut table = Positions {
+            first: chunk.first_vertex,
+            own: &chunk.vertices,
+            borrowed,
+            slots: vec![0; 1 << bits],
+            shift: 64 - bits,
+        };
+        let mask = table.slots.len() - 1;
+        for (k, &(id, _)) in borrowed.iter().enumerate() {
+            let mut h = table.slot(id);
+            while table.slots[h] != 0 {
+                h = (h + 1) & mask;
+            }
+            // `borrowed` is a slice of a Vec of at most 2^32 ids (they are u32), so k + 1 fits.
+            table.slots[h] = k as u32 + 1;
+        }
+        table
+    }
+
+    #[inline(always)]
+    fn slot(&self, id: u32) -> usize {
+        ((u64::from(id).wrapping_mul(0x9E37_79B9_7F4A_7C15)) >> self.shift) as usize
+    }
+
+    #[inline(always)]
+    fn get(&self, id: u32) -> Option<[f32; 3]> {
+        if let Some(k) = id.checked_sub(self.first) {
+            return self.own.get(k as usize).copied();
+        }
+        let mask = self.slots.len() - 1;
+        let mut h = self.slot(id);
+        loop {
+            let s = self.slots[h] as usize;
+            let &(at, p) = self.borrowed.get(s.checked_sub(1)?)?;
+            if at == id {
+                return Some(p);
+            }
+            h = (h + 1) & mask;
+        }
+    }
 }
 
 fn count_mismatch(what: &str, declared: u64, found: u64) -> io::Error {

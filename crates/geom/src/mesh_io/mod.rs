@@ -12,10 +12,10 @@
 //! - Every vertex is written by the indexed formats (PLY, OBJ, OFF, VTK), so indices in the file
 //!   are the mesh's own (plus one for OBJ). STL has no indices and repeats positions per facet.
 //! - [`write_chunked`] writes a mesh held as [`crate::mesh::MeshChunk`]s, a chunk at a time,
-//!   with exactly the bytes `write_mesh` writes for the concatenated mesh. Each chunk is
-//!   checked (as above, and against the chunk invariants) before its bytes are written, so a
-//!   bad chunk fails the call midway: the caller discards the partial output (the CLI's files
-//!   are temporary until renamed).
+//!   with exactly the bytes `write_mesh` writes for the concatenated mesh. Chunks are checked
+//!   (as above, and against the chunk invariants) as they come, so a bad chunk fails the call
+//!   midway: the caller discards the partial output (the CLI's files are temporary until
+//!   renamed).
 //! - Output is produced in blocks of about 1 MiB, encoded in parallel and written in order with
 //!   `write_all`; any error of `out` is returned as is, and the writer is flushed at the end.
 
