@@ -9,15 +9,26 @@
 //! - A corrupt or missing cache entry is never fatal: the node is run again.
 //! - Results go into the cache only after the stage succeeded; a failing stage leaves the
 //!   previous files and entries in place.
+//! - A 3D tiling's mesh never passes through here whole: the tile stage's chunks are streamed
+//!   into a pending cache entry by a writer thread (committed only when the stage succeeds),
+//!   and its value is a handle on that entry ([`Value::Chunked`]: the open file and its
+//!   verified trailer), which the write stage reads a chunk at a time. A chunk found corrupt
+//!   while a write reads it removes the entry and reruns the tile node, then the write.
 
 use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
+use std::sync::mpsc;
 use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::cache::{Cache, CacheError, ContentHash, Key, Lookup, explain};
+use latticebuild_geom::mesh::MeshChunk;
+
+use crate::cache::{Cache, CacheError, ContentHash, EntryReader, Key, Lookup, Opened, explain};
 use crate::graph::{Graph, NodeId};
+use crate::stages::chunked::{ChunkedMesh, ChunkedWriter, is_chunked};
+use crate::stages::tile::TileOutput;
+use crate::stages::write::{MeshInput, WriteError};
 use crate::stages::{MeshArtifact, OutputSink, Stage, WrittenOutput};
 
 /// Shows the progress of long stages; see [`crate::progress`].
@@ -84,8 +95,36 @@ pub enum BuildError {
 enum Value {
     Bytes(Arc<Vec<u8>>),
     Mesh(Arc<MeshArtifact>),
+    /// A chunked mesh, left in its cache entry: the open entry and its verified trailer.
+    Chunked(Arc<ChunkedMesh<EntryReader>>),
     Written(Arc<WrittenOutput>),
 }
+
+/// Why running a node failed.
+enum Failure {
+    Message(String),
+    /// The chunked mesh of input `input` turned out corrupt while being read.
+    CorruptInput {
+        input: NodeId,
+        reason: String,
+    },
+}
+
+impl From<String> for Failure {
+    fn from(message: String) -> Failure {
+        Failure::Message(message)
+    }
+}
+
+impl From<&str> for Failure {
+    fn from(message: &str) -> Failure {
+        Failure::Message(message.to_string())
+    }
+}
+
+/// Chunks in flight between the tile stage and the thread writing them to the cache: with
+/// one being made and one being written, memory holds about three chunks.
+const CHUNKS_IN_FLIGHT: usize = 1;
 
 struct Resolved {
     key: Key,
@@ -266,7 +305,7 @@ impl<'a> Builder<'a> {
             .into_par_iter()
             .map(|(id, key, desc, reason)| {
                 let started = Instant::now();
-                let result = this.execute(id);
+                let result = this.execute(id, &key);
                 (
                     id,
                     key,
@@ -277,12 +316,20 @@ impl<'a> Builder<'a> {
                 )
             })
             .collect();
-        for (id, key, desc, reason, result, seconds) in outcomes {
+        for (id, key, desc, reason, result, mut seconds) in outcomes {
+            let value = match result {
+                Ok(value) => value,
+                Err(Failure::CorruptInput { input, reason }) => {
+                    // Rebuild the input's entry, then run this node again, once.
+                    self.rerun_corrupt(input, &reason, store_mesh)?;
+                    let started = Instant::now();
+                    let again = self.execute(id, &key);
+                    seconds += started.elapsed().as_secs_f64();
+                    self.fail_on(id, again)?
+                }
+                Err(failure) => self.fail_on(id, Err(failure))?,
+            };
             let node = &self.graph.nodes[id];
-            let value = result.map_err(|message| BuildError::Stage {
-                node: node.name.clone(),
-                message,
-            })?;
             let hash = self.store(&key, &value, store_mesh)?;
             let mut why = reason.map_or_else(Vec::new, |r| vec![r]);
             if why.is_empty() {
@@ -403,6 +450,10 @@ impl<'a> Builder<'a> {
             return Ok(());
         }
         let key = self.resolved[&id].key;
+        if let Some(value) = self.open_chunked(&key)? {
+            self.resolved.get_mut(&id).expect("resolved").value = Some(value);
+            return Ok(());
+        }
         if let Lookup::Hit { payload, .. } = self.cache.get(&key)?
             && let Ok(value) = decode(&self.graph.nodes[id].stage, payload)
         {
@@ -411,21 +462,159 @@ impl<'a> Builder<'a> {
         }
         // The entry went bad between lookup and load: run the node again (deterministic, so
         // its hash and everything keyed on it stay the same).
-        for input in self.graph.nodes[id].inputs.clone() {
-            self.load(input, store_mesh)?;
-        }
-        let node = &self.graph.nodes[id];
-        let value = self.execute(id).map_err(|message| BuildError::Stage {
-            node: node.name.clone(),
-            message,
-        })?;
-        self.store(&key, &value, store_mesh)?;
-        self.resolved.get_mut(&id).expect("resolved").value = Some(value);
+        let why = "its cache entry was corrupt or gone when its payload was needed";
+        self.rerun(id, why.into(), store_mesh)?;
         Ok(())
     }
 
-    /// Runs node `id`'s stage on its inputs' values, which must be loaded.
-    fn execute(&self, id: NodeId) -> Result<Value, String> {
+    /// Runs node `id` again (its inputs loaded first), stores and records it as run for
+    /// `why`; returns its hash.
+    fn rerun(
+        &mut self,
+        id: NodeId,
+        why: String,
+        store_mesh: &mut StoreMesh,
+    ) -> Result<ContentHash, BuildError> {
+        let key = self.resolved[&id].key;
+        let started = Instant::now();
+        for input in self.graph.nodes[id].inputs.clone() {
+            self.load(input, store_mesh)?;
+        }
+        let value = self.execute(id, &key);
+        let value = self.fail_on(id, value)?;
+        let hash = self.store(&key, &value, store_mesh)?;
+        self.resolved.get_mut(&id).expect("resolved").value = Some(value);
+        let node = &self.graph.nodes[id];
+        self.runs.insert(
+            id,
+            NodeRun {
+                node: node.name.clone(),
+                stage: node.stage.kind(),
+                cached: false,
+                seconds: started.elapsed().as_secs_f64(),
+                why: vec![why],
+            },
+        );
+        Ok(hash)
+    }
+
+    /// The value of a run, or the build error naming node `id`.
+    fn fail_on(&self, id: NodeId, result: Result<Value, Failure>) -> Result<Value, BuildError> {
+        let node = &self.graph.nodes[id];
+        result.map_err(|failure| BuildError::Stage {
+            node: node.name.clone(),
+            message: match failure {
+                Failure::Message(message) => message,
+                Failure::CorruptInput { reason, .. } => {
+                    format!("its input was corrupt again after a rebuild: {reason}")
+                }
+            },
+        })
+    }
+
+    /// Input `id`'s chunked entry was found corrupt: removes it and runs the node again (it
+    /// is deterministic, so its hash and every key built on it stay the same), and says so
+    /// in its run.
+    fn rerun_corrupt(
+        &mut self,
+        id: NodeId,
+        reason: &str,
+        store_mesh: &mut StoreMesh,
+    ) -> Result<(), BuildError> {
+        let key = self.resolved[&id].key;
+        self.cache.remove(&key)?;
+        self.resolved.get_mut(&id).expect("resolved").value = None;
+        let why = format!("its cache entry was corrupt ({reason})");
+        if self.rerun(id, why, store_mesh)? != self.resolved[&id].hash {
+            return Err(BuildError::Stage {
+                node: self.graph.nodes[id].name.clone(),
+                message: "rebuilt after its cache entry was corrupt, it made different bytes \
+                          (the stage is not deterministic)"
+                    .into(),
+            });
+        }
+        Ok(())
+    }
+
+    /// `key`'s entry as a chunked mesh, if it is a good one. A chunked entry that fails
+    /// verification is removed (so the node reruns); any other entry is left to `get`.
+    fn open_chunked(&self, key: &Key) -> Result<Option<Value>, BuildError> {
+        let Opened::Entry(reader) = self.cache.open_entry(key)? else {
+            return Ok(None);
+        };
+        if !is_chunked(&reader).unwrap_or(false) {
+            return Ok(None);
+        }
+        match ChunkedMesh::open(reader) {
+            Ok(mesh) => Ok(Some(Value::Chunked(Arc::new(mesh)))),
+            Err(_) => {
+                self.cache.remove(key)?;
+                Ok(None)
+            }
+        }
+    }
+
+    /// Runs the tile stage with its chunks streamed into `key`'s entry by a writer thread,
+    /// committed only if the stage succeeds; a whole mesh (2D) comes back as it is.
+    fn run_tile(
+        &self,
+        stage: &crate::stages::tile::TileStage,
+        name: &str,
+        key: &Key,
+        cells: &[&[u8]],
+        file: Option<&[u8]>,
+    ) -> Result<Value, Failure> {
+        let cache = self.cache;
+        let progress = self.progress.start(name, 0);
+        std::thread::scope(|scope| {
+            let (send, receive) = mpsc::sync_channel::<MeshChunk>(CHUNKS_IN_FLIGHT);
+            let writer = scope.spawn(move || -> Result<_, String> {
+                // Begun on the first chunk, so a 2D tiling makes no temporary file.
+                let mut writer = None;
+                for chunk in receive {
+                    if writer.is_none() {
+                        let pending = cache.begin(key).map_err(|e| e.to_string())?;
+                        writer = Some(ChunkedWriter::new(pending).map_err(|e| e.to_string())?);
+                    }
+                    if let Some(w) = writer.as_mut() {
+                        w.push(&chunk)
+                            .map_err(|e| format!("cannot write the cache entry: {e}"))?;
+                    }
+                }
+                Ok(writer)
+            });
+            let output = stage.run(cells, file, &*progress, &mut |chunk| {
+                send.send(chunk)
+                    .map_err(|_| "the cache writer stopped".to_string())
+            });
+            drop(send);
+            let written = writer
+                .join()
+                .map_err(|_| "the cache writer panicked".to_string())?;
+            // A writer error explains a stage's "writer stopped", so it comes first.
+            let writer = written?;
+            match (output?, writer) {
+                (TileOutput::Whole(mesh), None) => Ok(Value::Mesh(Arc::new(mesh))),
+                (TileOutput::Chunked(head), Some(writer)) => {
+                    let (pending, _) = writer
+                        .finish(head)
+                        .map_err(|e| format!("cannot write the cache entry: {e}"))?;
+                    pending.commit().map_err(|e| e.to_string())?;
+                    match self.open_chunked(key).map_err(|e| e.to_string())? {
+                        Some(value) => Ok(value),
+                        None => Err("the cache entry just written cannot be read back".into()),
+                    }
+                }
+                (TileOutput::Chunked(_), None) => Err("the tiling produced no chunks".into()),
+                (TileOutput::Whole(_), Some(_)) => {
+                    Err("the tiling produced chunks and a whole mesh".into())
+                }
+            }
+        })
+    }
+
+    /// Runs node `id`'s stage (keyed `key`) on its inputs' values, which must be loaded.
+    fn execute(&self, id: NodeId, key: &Key) -> Result<Value, Failure> {
         let node = &self.graph.nodes[id];
         let input = |k: usize| {
             self.resolved[&node.inputs[k]]
@@ -441,7 +630,7 @@ impl<'a> Builder<'a> {
             )),
         };
         match &node.stage {
-            Stage::File(file) => Err(format!("`{}` is read, not run", file.given)),
+            Stage::File(file) => Err(format!("`{}` is read, not run", file.given).into()),
             Stage::Cell(stage) => Ok(Value::Bytes(Arc::new(stage.run()?))),
             Stage::MeshCell(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
             Stage::Crystal(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
@@ -457,7 +646,7 @@ impl<'a> Builder<'a> {
             }
             Stage::Contour(stage) => {
                 let Value::Bytes(cell) = input(0) else {
-                    return Err("input is not a cell".into());
+                    return Err(Failure::Message("input is not a cell".into()));
                 };
                 let part = if node.inputs.len() > 1 {
                     Some(bytes(1)?)
@@ -482,15 +671,28 @@ impl<'a> Builder<'a> {
                     .collect::<Result<Vec<_>, _>>()?;
                 let slices: Vec<&[u8]> = inputs.iter().map(|b| b.as_slice()).collect();
                 let (cells, file) = slices.split_at(stage.cell_inputs().min(slices.len()));
-                let progress = self.progress.start(&node.name, 0);
-                let mesh = stage.run(cells, file.first().copied(), &*progress)?;
-                Ok(Value::Mesh(Arc::new(mesh)))
+                self.run_tile(stage, &node.name, key, cells, file.first().copied())
             }
             Stage::Write(stage) => {
-                let Value::Mesh(mesh) = input(0) else {
-                    return Err("input is not a mesh".into());
+                let input = match input(0) {
+                    Value::Mesh(mesh) => stage.run(MeshInput::Whole(&mesh), self.sink),
+                    Value::Chunked(mesh) => stage.run(
+                        MeshInput::Chunked {
+                            chunks: &*mesh,
+                            head: &mesh.trailer.head,
+                        },
+                        self.sink,
+                    ),
+                    _ => return Err(Failure::Message("input is not a mesh".into())),
                 };
-                Ok(Value::Written(Arc::new(stage.run(&mesh, self.sink)?)))
+                match input {
+                    Ok(written) => Ok(Value::Written(Arc::new(written))),
+                    Err(WriteError::Failed(message)) => Err(Failure::Message(message)),
+                    Err(WriteError::CorruptInput(reason)) => Err(Failure::CorruptInput {
+                        input: node.inputs[0],
+                        reason,
+                    }),
+                }
             }
         }
     }
@@ -510,6 +712,8 @@ impl<'a> Builder<'a> {
                 store_mesh(*key, Arc::clone(mesh), hash);
                 hash
             }
+            // Streamed into its entry while it ran.
+            Value::Chunked(mesh) => mesh.source().hash(),
             Value::Written(written) => {
                 let json = serde_json::to_vec(&**written).expect("written output serializes");
                 self.cache.put(key, &json)?

@@ -44,9 +44,39 @@ pub(crate) fn temp_owner_pid(name: &str) -> Option<u32> {
 
 /// Deletes the temporary file unless it was renamed into place, so a failed or panicking write
 /// leaves nothing behind.
-struct TempFile {
+pub(crate) struct TempFile {
     path: PathBuf,
     persisted: bool,
+}
+
+impl TempFile {
+    /// A new, empty temporary file beside `destination`, opened for reading and writing.
+    pub(crate) fn beside(destination: &Path) -> Result<(TempFile, File), CacheError> {
+        let dir = destination.parent().unwrap_or(Path::new("."));
+        let temp = TempFile {
+            path: dir.join(temp_name()),
+            persisted: false,
+        };
+        let file = OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create_new(true)
+            .open(&temp.path)
+            .map_err(|e| CacheError::io("create", &temp.path, e))?;
+        Ok((temp, file))
+    }
+
+    pub(crate) fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Renames the file (closed by the caller first) over `destination`.
+    pub(crate) fn persist(mut self, destination: &Path) -> Result<(), CacheError> {
+        fs::rename(&self.path, destination)
+            .map_err(|e| CacheError::io("rename into place", destination, e))?;
+        self.persisted = true;
+        Ok(())
+    }
 }
 
 impl Drop for TempFile {
@@ -69,24 +99,12 @@ pub(crate) fn write_atomically(
     buffer: usize,
     write: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
 ) -> Result<(), CacheError> {
-    let dir = destination.parent().unwrap_or(Path::new("."));
-    let mut temp = TempFile {
-        path: dir.join(temp_name()),
-        persisted: false,
-    };
-    let file = OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&temp.path)
-        .map_err(|e| CacheError::io("create", &temp.path, e))?;
+    let (temp, file) = TempFile::beside(destination)?;
     let mut writer = BufWriter::with_capacity(buffer, file);
     write(&mut writer)
         .and_then(|()| writer.flush())
         .map_err(|e| CacheError::io("write", &temp.path, e))?;
     // Close before renaming: some platforms refuse to rename an open file.
     drop(writer);
-    fs::rename(&temp.path, destination)
-        .map_err(|e| CacheError::io("rename into place", destination, e))?;
-    temp.persisted = true;
-    Ok(())
+    temp.persist(destination)
 }

@@ -57,7 +57,9 @@ pub use key::{
 };
 pub use param::Param;
 pub use record::Record;
-pub use store::{Corruption, FORMAT_VERSION, LocalStore, Lookup, Store};
+pub use store::{
+    Corruption, EntryReader, FORMAT_VERSION, LocalStore, Lookup, Opened, PendingEntry, Store,
+};
 
 use crate::cache::atomic::write_atomically;
 
@@ -158,6 +160,22 @@ impl Cache {
         hash: ContentHash,
     ) -> Result<(), CacheError> {
         self.store.put_parts(key, parts, hash)
+    }
+
+    /// Starts writing `key`'s entry a piece at a time; see [`PendingEntry`].
+    pub fn begin(&self, key: &Key) -> Result<PendingEntry, CacheError> {
+        self.store.begin(key)
+    }
+
+    /// Opens `key`'s entry for reads at offsets, its header checked but not its hash; see
+    /// [`EntryReader`].
+    pub fn open_entry(&self, key: &Key) -> Result<Opened, CacheError> {
+        self.store.open(key)
+    }
+
+    /// Removes `key`'s entry (one found corrupt by a reader of parts); `false` if absent.
+    pub fn remove(&self, key: &Key) -> Result<bool, CacheError> {
+        self.store.remove(key)
     }
 
     /// Whether an entry for `key` exists (not verified).

@@ -16,14 +16,22 @@
 //! Invariants: an entry is whole or absent — it is written to a temporary file and renamed into
 //! place, and `get` checks magic, length and hash, so a torn, truncated or bit-flipped entry is
 //! reported as [`Lookup::Corrupt`], deleted, and never returned as a hit.
+//!
+//! Large payloads also go in and out a piece at a time: [`LocalStore::begin`] gives a
+//! [`PendingEntry`] that hashes what is written to it and, on `commit`, fixes up the header and
+//! renames the file into place (dropped uncommitted, it leaves nothing); [`LocalStore::open`]
+//! checks the header and the length only and hands out an [`EntryReader`] for reads at
+//! offsets. The whole-payload hash is then not checked: a reader of parts must verify what it
+//! reads by hashes of its own (the chunked mesh payload keeps one per section), and report a
+//! mismatch so the entry is removed and rebuilt.
 
 use std::collections::HashSet;
 use std::fmt;
 use std::fs::{self, File};
-use std::io::{self, Read, Write};
+use std::io::{self, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
-use crate::cache::atomic::{temp_owner_pid, write_atomically};
+use crate::cache::atomic::{TempFile, temp_owner_pid, write_atomically};
 use crate::cache::content_hash::ContentHash;
 use crate::cache::error::CacheError;
 use crate::cache::key::Key;
@@ -179,6 +187,198 @@ impl LocalStore {
         }
         Ok(removed)
     }
+}
+
+impl LocalStore {
+    /// Starts writing the entry for `key` a piece at a time (see [`PendingEntry`]).
+    pub fn begin(&self, key: &Key) -> Result<PendingEntry, CacheError> {
+        let destination = self.entry_path(key);
+        if let Some(dir) = destination.parent() {
+            fs::create_dir_all(dir).map_err(|e| CacheError::io("create directory", dir, e))?;
+        }
+        let (temp, file) = TempFile::beside(&destination)?;
+        let mut writer = BufWriter::with_capacity(WRITE_BUFFER, file);
+        // Zeros until `commit` knows the length and hash: a crash before then leaves a temp
+        // file (removed by `gc`), and even a renamed zero header reads as bad magic.
+        writer
+            .write_all(&[0u8; HEADER_LEN])
+            .map_err(|e| CacheError::io("write", temp.path(), e))?;
+        Ok(PendingEntry {
+            temp,
+            writer,
+            hasher: blake3::Hasher::new(),
+            len: 0,
+            destination,
+        })
+    }
+
+    /// Opens the entry for `key` for reads at offsets, after checking its header and length
+    /// (not its hash). An entry whose header is bad is removed and reported as corrupt.
+    pub fn open(&self, key: &Key) -> Result<Opened, CacheError> {
+        let path = self.entry_path(key);
+        let mut file = match File::open(&path) {
+            Ok(file) => file,
+            Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(Opened::Miss),
+            Err(e) => return Err(CacheError::io("open", &path, e)),
+        };
+        let file_len = file
+            .metadata()
+            .map_err(|e| CacheError::io("read metadata of", &path, e))?
+            .len();
+        match read_header(&mut file, file_len) {
+            Ok(header) => Ok(Opened::Entry(EntryReader {
+                file,
+                len: header.payload_len,
+                hash: header.hash,
+            })),
+            Err(ReadFailure::Corrupt(reason)) => {
+                drop(file);
+                // As in `get`: failing to remove only means it is reported again.
+                let _ = fs::remove_file(&path);
+                Ok(Opened::Corrupt(reason))
+            }
+            Err(ReadFailure::Io(action, e)) => Err(CacheError::io(action, &path, e)),
+        }
+    }
+}
+
+/// An entry being written. Bytes written to it are the payload, hashed as they pass; `commit`
+/// writes the header and renames the file into place. Dropping it uncommitted (an error, a
+/// failed stage) removes the temporary file, so the entry stays whole or absent.
+pub struct PendingEntry {
+    temp: TempFile,
+    writer: BufWriter<File>,
+    hasher: blake3::Hasher,
+    len: u64,
+    destination: PathBuf,
+}
+
+impl Write for PendingEntry {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        let n = self.writer.write(buf)?;
+        self.hasher.update(&buf[..n]);
+        self.len += n as u64;
+        Ok(n)
+    }
+
+    fn write_all(&mut self, buf: &[u8]) -> io::Result<()> {
+        // Large writes bypass the buffer and go straight from the caller's slice.
+        self.writer.write_all(buf)?;
+        self.hasher.update(buf);
+        self.len += buf.len() as u64;
+        Ok(())
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        self.writer.flush()
+    }
+}
+
+impl PendingEntry {
+    /// Payload bytes written so far.
+    pub fn len(&self) -> u64 {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Fixes up the header and renames the entry into place; returns the payload's hash, the
+    /// same [`ContentHash::of`] the whole payload would have.
+    pub fn commit(self) -> Result<ContentHash, CacheError> {
+        let PendingEntry {
+            temp,
+            writer,
+            hasher,
+            len,
+            destination,
+        } = self;
+        let hash = ContentHash::from_bytes(*hasher.finalize().as_bytes());
+        let mut header = [0u8; HEADER_LEN];
+        header[0..4].copy_from_slice(&MAGIC);
+        header[4..8].copy_from_slice(&FORMAT_VERSION.to_le_bytes());
+        header[8..16].copy_from_slice(&len.to_le_bytes());
+        header[16..48].copy_from_slice(hash.as_bytes());
+        let fix_up = |writer: BufWriter<File>| -> io::Result<()> {
+            let mut file = writer.into_inner().map_err(|e| e.into_error())?;
+            file.seek(SeekFrom::Start(0))?;
+            file.write_all(&header)
+        };
+        fix_up(writer).map_err(|e| CacheError::io("write", temp.path(), e))?;
+        // The file was closed by `fix_up`: some platforms refuse to rename an open file.
+        temp.persist(&destination)?;
+        Ok(hash)
+    }
+}
+
+/// The outcome of [`LocalStore::open`].
+pub enum Opened {
+    Miss,
+    /// The header was bad; the entry has been removed.
+    Corrupt(Corruption),
+    Entry(EntryReader),
+}
+
+/// An entry opened for reads at offsets into its payload. Reads never move a shared cursor,
+/// so one reader serves several threads at once.
+#[derive(Debug)]
+pub struct EntryReader {
+    file: File,
+    len: u64,
+    hash: ContentHash,
+}
+
+impl EntryReader {
+    /// The payload's length.
+    pub fn len(&self) -> u64 {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The payload hash the header records (not verified: see the module docs).
+    pub fn hash(&self) -> ContentHash {
+        self.hash
+    }
+
+    /// Fills `buf` from the payload at `offset`. Reading past the payload is `UnexpectedEof`.
+    pub fn read_at(&self, offset: u64, buf: &mut [u8]) -> io::Result<()> {
+        let end = offset.checked_add(buf.len() as u64);
+        if end.is_none_or(|end| end > self.len) {
+            return Err(io::Error::new(
+                io::ErrorKind::UnexpectedEof,
+                format!(
+                    "{} bytes at {offset} are past the payload's {}",
+                    buf.len(),
+                    self.len
+                ),
+            ));
+        }
+        read_exact_at(&self.file, buf, HEADER_LEN as u64 + offset)
+    }
+}
+
+#[cfg(unix)]
+fn read_exact_at(file: &File, buf: &mut [u8], at: u64) -> io::Result<()> {
+    std::os::unix::fs::FileExt::read_exact_at(file, buf, at)
+}
+
+#[cfg(windows)]
+fn read_exact_at(file: &File, mut buf: &mut [u8], mut at: u64) -> io::Result<()> {
+    use std::os::windows::fs::FileExt;
+    while !buf.is_empty() {
+        match file.seek_read(buf, at)? {
+            0 => return Err(io::ErrorKind::UnexpectedEof.into()),
+            n => {
+                buf = &mut buf[n..];
+                at += n as u64;
+            }
+        }
+    }
+    Ok(())
 }
 
 impl Store for LocalStore {

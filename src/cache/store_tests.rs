@@ -272,3 +272,68 @@ fn store_is_object_safe() {
     store.put(&k, b"via the trait").unwrap();
     assert_eq!(expect_hit(store.get(&k).unwrap()).0, b"via the trait");
 }
+
+#[test]
+fn a_streamed_entry_is_the_entry_put_would_write() {
+    let (_dir, store) = store();
+    let data = payload(3 << 20, 7);
+    let mut pending = store.begin(&key(1)).unwrap();
+    // Uneven pieces, some larger than the write buffer.
+    for piece in data.chunks(1_234_567) {
+        std::io::Write::write_all(&mut pending, piece).unwrap();
+    }
+    let hash = pending.commit().unwrap();
+    assert_eq!(hash, ContentHash::of(&data));
+    let streamed = fs::read(store.entry_path(&key(1))).unwrap();
+    store.put(&key(2), &data).unwrap();
+    assert_eq!(streamed, fs::read(store.entry_path(&key(2))).unwrap());
+    assert_eq!(
+        expect_hit(store.get(&key(1)).unwrap()),
+        (data.clone(), hash)
+    );
+
+    let crate::cache::Opened::Entry(reader) = store.open(&key(1)).unwrap() else {
+        panic!("expected an entry");
+    };
+    assert_eq!((reader.len(), reader.hash()), (data.len() as u64, hash));
+    let mut buf = vec![0u8; 1000];
+    reader.read_at(2_000_000, &mut buf).unwrap();
+    assert_eq!(buf, data[2_000_000..2_001_000]);
+    let end = data.len() as u64 - 999;
+    assert!(reader.read_at(end, &mut buf).is_err(), "past the payload");
+    assert!(
+        reader.read_at(u64::MAX - 10, &mut buf).is_err(),
+        "overflowing offset"
+    );
+}
+
+#[test]
+fn an_uncommitted_stream_leaves_nothing() {
+    let (dir, store) = store();
+    let mut pending = store.begin(&key(1)).unwrap();
+    std::io::Write::write_all(&mut pending, &payload(5000, 1)).unwrap();
+    drop(pending);
+    assert!(matches!(store.get(&key(1)).unwrap(), Lookup::Miss));
+    let shard = store.entry_path(&key(1));
+    let left = fs::read_dir(shard.parent().unwrap()).unwrap().count();
+    assert_eq!(left, 0, "temp file left in {}", dir.path().display());
+}
+
+#[test]
+fn opening_a_truncated_entry_is_corrupt_and_removes_it() {
+    let (_dir, store) = store();
+    store.put(&key(1), &payload(10_000, 3)).unwrap();
+    let path = store.entry_path(&key(1));
+    let file = OpenOptions::new().write(true).open(&path).unwrap();
+    file.set_len(5_000).unwrap();
+    drop(file);
+    assert!(matches!(
+        store.open(&key(1)).unwrap(),
+        crate::cache::Opened::Corrupt(Corruption::Truncated { .. })
+    ));
+    assert!(!path.exists());
+    assert!(matches!(
+        store.open(&key(1)).unwrap(),
+        crate::cache::Opened::Miss
+    ));
+}

@@ -25,6 +25,7 @@
 
 pub mod artifact;
 pub mod cell;
+pub mod chunked;
 pub mod contour;
 pub mod crystal;
 pub mod mesh;

@@ -6,6 +6,11 @@
 //! triangle mesh, reported by its area over the scaffold's (a planar one also drawn as SVG over
 //! its scaffold), or made a closed solid by `extrude` (planar only) or `thickness_normal`.
 //!
+//! A 3D scaffold's mesh is produced, checked and handed on a [`MeshChunk`] at a time (the
+//! builder streams the chunks into the cache), so the stage never needs the whole mesh; its
+//! result is then only the head (summary and tiling), [`TileOutput::Chunked`]. 2D tilings
+//! stay whole meshes.
+//!
 //! Invariants:
 //! - A pure function of its parameters and its inputs: the cells' coefficient tables (one, or
 //!   two for a transition) and, for a `mesh =` scaffold, the file's bytes (last input). The
@@ -25,15 +30,16 @@
 
 use latticebuild_geom::expr;
 use latticebuild_geom::field::{ScalarField, Solid};
-use latticebuild_geom::mesh::Mesh;
+use latticebuild_geom::mesh::{Mesh, MeshChunk};
 use latticebuild_geom::scaffold::{self, ElementKind, Scaffold};
 use latticebuild_geom::tile::{
-    RegionError, TiledRegion, TiledSolid, Transition, extrude, region_svg, thickness_normal,
-    tile_scaffold_with_skin, tile_surface_scaffold,
+    RegionError, TiledRegion, TiledSolid, Transition, chunk_elements_for, extrude, region_svg,
+    stream_scaffold, thickness_normal, tile_surface_scaffold,
 };
-use latticebuild_geom::validate;
+use latticebuild_geom::validate::{self, StreamCheck};
 
 use super::artifact::{MeshArtifact, MeshSummary, Planar, TilingSummary};
+use super::chunked::ChunkedHead;
 use super::symmetric::{FittedPayload, group_of};
 use crate::build::StageProgress;
 use crate::cache::{KeyBuilder, Param};
@@ -45,6 +51,20 @@ use crate::manifest::{
 /// 3: quadratic elements interpolate nodal values through all their nodes; weights clamped
 /// after interpolation.
 pub const VERSION: u32 = 3;
+
+/// Triangles per chunk asked of the producer, about. Chunk boundaries are in the payload's
+/// bytes, so in its hash: the chunk size is a function of the resolution (in the key) alone,
+/// never of the machine.
+const CHUNK_TRIANGLES: usize = 2_000_000;
+
+/// What the stage made: a whole mesh (2D tilings), or the head of a mesh whose chunks went to
+/// the `chunks` callback of [`TileStage::run`].
+#[derive(Debug)]
+pub enum TileOutput {
+    Whole(MeshArtifact),
+    Chunked(ChunkedHead),
+}
+
 
 /// Where the scaffold comes from.
 #[derive(Clone, Debug, PartialEq)]
@@ -227,13 +247,15 @@ impl TileStage {
         }
     }
 
-    /// Runs the stage on the cells' coefficient tables and, for a file, its bytes.
+    /// Runs the stage on the cells' coefficient tables and, for a file, its bytes. A 3D
+    /// tiling's chunks go to `chunks`, in order, as they are made and checked.
     pub fn run(
         &self,
         cells: &[&[u8]],
         file: Option<&[u8]>,
         progress: &dyn StageProgress,
-    ) -> Result<MeshArtifact, String> {
+        chunks: &mut dyn FnMut(MeshChunk) -> Result<(), String>,
+    ) -> Result<TileOutput, String> {
         progress.phase("reading the scaffold");
         let scaffold = self.scaffold(file)?;
         self.check_kind(scaffold.kind)?;
@@ -269,24 +291,34 @@ impl TileStage {
         };
         progress.phase("tiling");
         if scaffold.kind.dimension() == 2 {
-            return self.tile_surface(&scaffold, &solid, progress);
+            return self
+                .tile_surface(&scaffold, &solid, progress)
+                .map(TileOutput::Whole);
         }
-        let (mesh, stats) = tile_scaffold_with_skin(&scaffold, &solid, self.skin, self.resolution)
-            .map_err(|e| format!("tiling {}: {e}", self.source()))?;
-        if mesh.is_empty() {
+        let mut check = StreamCheck::new();
+        let stats = stream_scaffold(
+            &scaffold,
+            &solid,
+            self.skin,
+            self.resolution,
+            chunk_elements_for(self.resolution, CHUNK_TRIANGLES),
+            &mut |chunk| {
+                check.push(&chunk);
+                chunks(chunk)
+            },
+        )
+        .map_err(|e| format!("tiling {}: {e}", self.source()))?;
+        progress.phase("checking the mesh");
+        let check = check.finish();
+        if check.triangles == 0 {
             return Err(format!(
                 "the tiled solid of `outputs.{}` is empty: the cell has no solid part at this \
                  offset or thickness",
                 self.output
             ));
         }
-        progress.phase("checking the mesh");
-        let summary = MeshSummary::from_check(&validate::check(&mesh));
-        Ok(MeshArtifact {
-            mesh,
-            summary,
-            planar: None,
-            domain: None,
+        Ok(TileOutput::Chunked(ChunkedHead {
+            summary: MeshSummary::from_check(&check),
             tiling: Some(TilingSummary {
                 element: scaffold.kind.name().to_string(),
                 elements: stats.elements as u64,
@@ -295,7 +327,7 @@ impl TileStage {
                 scaffold_volume: scaffold.measure(),
                 region_area: None,
             }),
-        })
+        }))
     }
 
     /// A 2D scaffold: its region, drawn when planar, or the closed solid made of it.

@@ -1,13 +1,20 @@
 //! The `write` stage: writes a mesh in each requested format through an [`OutputSink`].
+//!
+//! Its input is a whole mesh, or a chunked one read from its cache entry a chunk at a time
+//! ([`MeshInput::Chunked`]), so writing a tiled mesh of any size holds one chunk per format.
+//! A chunked input found corrupt while being read is [`WriteError::CorruptInput`]: the files
+//! being written are discarded (the sink renames only whole files) and the builder reruns the
+//! node that made the mesh.
 
 use std::io::{self, Write};
 
 use rayon::prelude::*;
 
 use latticebuild_geom::contour2d::PlanarRegion;
-use latticebuild_geom::mesh_io::{self, Encoding, Format};
+use latticebuild_geom::mesh_io::{self, ChunkSource, Encoding, Format};
 
 use super::artifact::{MeshArtifact, WrittenFile, WrittenOutput};
+use super::chunked::{ChunkedHead, is_corrupt};
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::Output;
 
@@ -26,6 +33,24 @@ pub trait OutputSink: Sync {
 
     /// Whether `file` is still on disk as it was written (same size and modification time).
     fn holds(&self, file: &WrittenFile) -> bool;
+}
+
+/// The mesh the write stage writes.
+#[derive(Clone, Copy)]
+pub enum MeshInput<'a> {
+    Whole(&'a MeshArtifact),
+    Chunked {
+        chunks: &'a dyn ChunkSource,
+        head: &'a ChunkedHead,
+    },
+}
+
+/// Why the write stage failed.
+#[derive(Debug)]
+pub enum WriteError {
+    /// The chunked input's entry failed verification while being read.
+    CorruptInput(String),
+    Failed(String),
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -63,19 +88,30 @@ impl WriteStage {
     /// Writes every format (in parallel: each writer streams on its own).
     pub fn run(
         &self,
-        artifact: &MeshArtifact,
+        input: MeshInput,
         sink: &dyn OutputSink,
-    ) -> Result<WrittenOutput, String> {
+    ) -> Result<WrittenOutput, WriteError> {
         let files = self
             .formats
             .par_iter()
             .map(|&format| {
                 let path = self.path(format);
                 let (bytes, modified_ns) = sink
-                    .write_file(&path, &mut |w| {
-                        mesh_io::write_mesh(&artifact.mesh, format, self.encoding, w)
+                    .write_file(&path, &mut |w| match input {
+                        MeshInput::Whole(artifact) => {
+                            mesh_io::write_mesh(&artifact.mesh, format, self.encoding, w)
+                        }
+                        MeshInput::Chunked { chunks, .. } => {
+                            mesh_io::write_chunked(chunks, format, self.encoding, w)
+                        }
                     })
-                    .map_err(|e| format!("cannot write `{path}`: {e}"))?;
+                    .map_err(|e| {
+                        if is_corrupt(&e) {
+                            WriteError::CorruptInput(e.to_string())
+                        } else {
+                            WriteError::Failed(format!("cannot write `{path}`: {e}"))
+                        }
+                    })?;
                 Ok(WrittenFile {
                     path,
                     format: format.name().to_string(),
@@ -83,7 +119,19 @@ impl WriteStage {
                     modified_ns,
                 })
             })
-            .collect::<Result<Vec<_>, String>>()?;
+            .collect::<Result<Vec<_>, WriteError>>()?;
+        let artifact = match input {
+            MeshInput::Whole(artifact) => artifact,
+            MeshInput::Chunked { head, .. } => {
+                return Ok(WrittenOutput {
+                    files,
+                    summary: head.summary.clone(),
+                    planar_element_area: None,
+                    domain: None,
+                    tiling: head.tiling.clone(),
+                });
+            }
+        };
         let mut files = files;
         let drawn = artifact
             .planar
@@ -103,7 +151,7 @@ impl WriteStage {
                     Some(svg) => w.write_all(svg.as_bytes()),
                     None => mesh_io::write_svg(&region, &planar.element, w),
                 })
-                .map_err(|e| format!("cannot write `{path}`: {e}"))?;
+                .map_err(|e| WriteError::Failed(format!("cannot write `{path}`: {e}")))?;
             files.push(WrittenFile {
                 path,
                 format: "svg".into(),

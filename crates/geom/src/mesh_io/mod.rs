@@ -11,9 +11,15 @@
 //!   decimal that parses back to it bit for bit.
 //! - Every vertex is written by the indexed formats (PLY, OBJ, OFF, VTK), so indices in the file
 //!   are the mesh's own (plus one for OBJ). STL has no indices and repeats positions per facet.
+//! - [`write_chunked`] writes a mesh held as [`crate::mesh::MeshChunk`]s, a chunk at a time,
+//!   with exactly the bytes `write_mesh` writes for the concatenated mesh. Chunks are checked
+//!   (as above, and against the chunk invariants) as they come, so a bad chunk fails the call
+//!   midway: the caller discards the partial output (the CLI's files are temporary until
+//!   renamed).
 //! - Output is produced in blocks of about 1 MiB, encoded in parallel and written in order with
 //!   `write_all`; any error of `out` is returned as is, and the writer is flushed at the end.
 
+mod chunked;
 mod encode;
 mod obj;
 mod off;
@@ -26,6 +32,7 @@ use crate::mesh::Mesh;
 use rayon::prelude::*;
 use std::io::{self, Write};
 
+pub use chunked::{ChunkSource, Pass, write_chunked};
 pub use svg::{scaffold_svg, write_svg};
 
 /// Writes `mesh` to `out` in `format`. `encoding` chooses binary or text for STL, PLY and VTK
@@ -51,37 +58,50 @@ pub fn write_mesh(
 /// the writers fail halfway (STL) or write a corrupt file (the others), and a non-finite
 /// coordinate is not a point (most readers reject `NaN`/`inf`).
 fn check_input(mesh: &Mesh) -> io::Result<()> {
-    // Branch-free folds over fixed chunks vectorize; the slow search for the culprit only runs
-    // once a chunk is known to hold one.
-    const CHUNK: usize = 1 << 16;
-    let n = mesh.vertices.len();
-    let index_in_range = |tri: &[u32; 3]| tri.iter().all(|&i| (i as usize) < n);
-    let indices_ok = mesh.triangles.par_chunks(CHUNK).all(|chunk| {
+    check_indices(&mesh.triangles, mesh.vertices.len() as u64, 0)?;
+    check_finite(&mesh.vertices, 0)
+}
+
+/// Branch-free folds over fixed blocks vectorize; the slow search for the culprit only runs
+/// once a block is known to hold one.
+const CHECK_BLOCK: usize = 1 << 16;
+
+/// Every index of `triangles` (numbered from `first`) is below `n`.
+fn check_indices(triangles: &[[u32; 3]], n: u64, first: u64) -> io::Result<()> {
+    let indices_ok = triangles.par_chunks(CHECK_BLOCK).all(|chunk| {
         let largest = chunk.iter().flatten().fold(0, |m: u32, &i| m.max(i));
-        (largest as usize) < n
+        u64::from(largest) < n
     });
-    if !indices_ok && let Some(t) = mesh.triangles.iter().position(|tri| !index_in_range(tri)) {
+    let in_range = |tri: &[u32; 3]| tri.iter().all(|&i| u64::from(i) < n);
+    if !indices_ok && let Some(t) = triangles.iter().position(|tri| !in_range(tri)) {
         return Err(io::Error::new(
             io::ErrorKind::InvalidInput,
             format!(
-                "triangle {t} {:?} indexes past the {n} vertices",
-                mesh.triangles[t]
+                "triangle {} {:?} indexes past the {n} vertices",
+                first + t as u64,
+                triangles[t]
             ),
         ));
     }
+    Ok(())
+}
+
+/// Every coordinate of `vertices` (numbered from `first`) is finite.
+fn check_finite(vertices: &[[f32; 3]], first: u64) -> io::Result<()> {
     let finite = |p: &[f32; 3]| p.iter().all(|c| c.is_finite());
-    let coordinates_ok = mesh.vertices.par_chunks(CHUNK).all(|chunk| {
+    let coordinates_ok = vertices.par_chunks(CHECK_BLOCK).all(|chunk| {
         chunk
             .iter()
             .flatten()
             .fold(true, |ok, c| ok & c.is_finite())
     });
-    if !coordinates_ok && let Some(v) = mesh.vertices.iter().position(|p| !finite(p)) {
+    if !coordinates_ok && let Some(v) = vertices.iter().position(|p| !finite(p)) {
         return Err(io::Error::new(
             io::ErrorKind::InvalidInput,
             format!(
-                "vertex {v} {:?} has a non-finite coordinate",
-                mesh.vertices[v]
+                "vertex {} {:?} has a non-finite coordinate",
+                first + v as u64,
+                vertices[v]
             ),
         ));
     }

@@ -6,12 +6,19 @@ use crate::mesh::Mesh;
 use std::io::{self, Write};
 
 pub(super) fn write(mesh: &Mesh, out: &mut dyn Write) -> io::Result<()> {
-    write!(
-        out,
-        "OFF\n{} {} 0\n",
-        mesh.vertices.len(),
-        mesh.triangles.len()
-    )?;
-    write_text_points(out, &mesh.vertices, b"")?;
-    write_text_faces(out, &mesh.triangles, b"3 ", 0)
+    header(mesh.vertices.len() as u64, mesh.triangles.len() as u64, out)?;
+    vertices(&mesh.vertices, out)?;
+    faces(&mesh.triangles, out)
+}
+
+pub(super) fn header(nv: u64, nt: u64, out: &mut dyn Write) -> io::Result<()> {
+    write!(out, "OFF\n{nv} {nt} 0\n")
+}
+
+pub(super) fn vertices(vertices: &[[f32; 3]], out: &mut dyn Write) -> io::Result<()> {
+    write_text_points(out, vertices, b"")
+}
+
+pub(super) fn faces(triangles: &[[u32; 3]], out: &mut dyn Write) -> io::Result<()> {
+    write_text_faces(out, triangles, b"3 ", 0)
 }

@@ -23,16 +23,23 @@ const POINT_BYTES: usize = 12;
 const POLYGON_BYTES: usize = 16;
 
 pub(super) fn write(mesh: &Mesh, encoding: Encoding, out: &mut dyn Write) -> io::Result<()> {
-    let limit = i32::MAX as usize;
-    let polygon_ints = mesh.triangles.len().saturating_mul(4);
-    if mesh.vertices.len() > limit + 1 || polygon_ints > limit {
+    let (nv, nt) = (mesh.vertices.len() as u64, mesh.triangles.len() as u64);
+    header(nv, nt, encoding, out)?;
+    points(&mesh.vertices, encoding, out)?;
+    polygons_header(nt, encoding, out)?;
+    polygons(&mesh.triangles, encoding, out)?;
+    end(encoding, out)
+}
+
+/// Everything before the points, after checking the 32-bit limits.
+pub(super) fn header(nv: u64, nt: u64, encoding: Encoding, out: &mut dyn Write) -> io::Result<()> {
+    let limit = i32::MAX as u64;
+    if nv > limit + 1 || nt.saturating_mul(4) > limit {
         return Err(io::Error::new(
             io::ErrorKind::InvalidInput,
             format!(
                 "legacy VTK counts and indices are 32-bit signed: \
-                 mesh has {} vertices, {} triangles",
-                mesh.vertices.len(),
-                mesh.triangles.len()
+                 mesh has {nv} vertices, {nt} triangles"
             ),
         ));
     }
@@ -43,49 +50,69 @@ pub(super) fn write(mesh: &Mesh, encoding: Encoding, out: &mut dyn Write) -> io:
     write!(
         out,
         "# vtk DataFile Version 3.0\nlatticebuild mesh\n{name}\nDATASET POLYDATA\n\
-         POINTS {} float\n",
-        mesh.vertices.len()
-    )?;
+         POINTS {nv} float\n"
+    )
+}
+
+/// Point records, in order.
+pub(super) fn points(
+    vertices: &[[f32; 3]],
+    encoding: Encoding,
+    out: &mut dyn Write,
+) -> io::Result<()> {
     match encoding {
         Encoding::Binary => {
-            write_encoded(
-                out,
-                &mesh.vertices,
-                records_per_block(POINT_BYTES),
-                |buf, p| {
-                    let mut record = [0u8; POINT_BYTES];
-                    for (slot, value) in record.chunks_exact_mut(4).zip(p) {
-                        slot.copy_from_slice(&value.to_be_bytes());
-                    }
-                    buf.extend_from_slice(&record);
-                },
-            )?;
-            write!(
-                out,
-                "\nPOLYGONS {} {}\n",
-                mesh.triangles.len(),
-                polygon_ints
-            )?;
-            write_encoded(
-                out,
-                &mesh.triangles,
-                records_per_block(POLYGON_BYTES),
-                |buf, tri| {
-                    let mut record = [0u8; POLYGON_BYTES];
-                    record[..4].copy_from_slice(&3i32.to_be_bytes());
-                    for (slot, index) in record[4..].chunks_exact_mut(4).zip(tri) {
-                        // In range for i32 by the vertex-count check above, so the bits are equal.
-                        slot.copy_from_slice(&index.to_be_bytes());
-                    }
-                    buf.extend_from_slice(&record);
-                },
-            )?;
-            out.write_all(b"\n")
+            write_encoded(out, vertices, records_per_block(POINT_BYTES), |buf, p| {
+                let mut record = [0u8; POINT_BYTES];
+                for (slot, value) in record.chunks_exact_mut(4).zip(p) {
+                    slot.copy_from_slice(&value.to_be_bytes());
+                }
+                buf.extend_from_slice(&record);
+            })
         }
-        Encoding::Ascii => {
-            write_text_points(out, &mesh.vertices, b"")?;
-            writeln!(out, "POLYGONS {} {}", mesh.triangles.len(), polygon_ints)?;
-            write_text_faces(out, &mesh.triangles, b"3 ", 0)
-        }
+        Encoding::Ascii => write_text_points(out, vertices, b""),
+    }
+}
+
+/// The `POLYGONS` line between the sections (a binary section ends with its own newline).
+pub(super) fn polygons_header(nt: u64, encoding: Encoding, out: &mut dyn Write) -> io::Result<()> {
+    let ints = nt * 4;
+    match encoding {
+        Encoding::Binary => write!(out, "\nPOLYGONS {nt} {ints}\n"),
+        Encoding::Ascii => writeln!(out, "POLYGONS {nt} {ints}"),
+    }
+}
+
+/// Polygon records, in order.
+pub(super) fn polygons(
+    triangles: &[[u32; 3]],
+    encoding: Encoding,
+    out: &mut dyn Write,
+) -> io::Result<()> {
+    match encoding {
+        Encoding::Binary => write_encoded(
+            out,
+            triangles,
+            records_per_block(POLYGON_BYTES),
+            |buf, tri| {
+                let mut record = [0u8; POLYGON_BYTES];
+                record[..4].copy_from_slice(&3i32.to_be_bytes());
+                for (slot, index) in record[4..].chunks_exact_mut(4).zip(tri) {
+                    // In range for i32 by the vertex-count check of the header, so the bits are
+                    // equal.
+                    slot.copy_from_slice(&index.to_be_bytes());
+                }
+                buf.extend_from_slice(&record);
+            },
+        ),
+        Encoding::Ascii => write_text_faces(out, triangles, b"3 ", 0),
+    }
+}
+
+/// What follows the polygons: the binary section's newline.
+pub(super) fn end(encoding: Encoding, out: &mut dyn Write) -> io::Result<()> {
+    match encoding {
+        Encoding::Binary => out.write_all(b"\n"),
+        Encoding::Ascii => Ok(()),
     }
 }
