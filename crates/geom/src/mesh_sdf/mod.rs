@@ -45,6 +45,7 @@
 //! samplers, the grid row): never of thread count or evaluation order.
 
 mod bvh;
+mod lanes;
 mod nearest;
 mod prepare;
 mod sampler;
@@ -108,6 +109,8 @@ pub enum MeshSdfError {
         index: u32,
         count: usize,
     },
+    #[error("the mesh has {triangles} triangles, more than the {max} supported")]
+    TooLarge { triangles: usize, max: usize },
     #[error("vertex {vertex} has a non-finite coordinate")]
     NonFinite { vertex: usize },
     #[error("{what} must be {expected}, got {value}")]
@@ -257,6 +260,12 @@ fn check_options(options: &SdfOptions) -> Result<(), MeshSdfError> {
 fn check_soup(soup: &TriangleSoup) -> Result<(), MeshSdfError> {
     if soup.triangles.is_empty() {
         return Err(MeshSdfError::Empty);
+    }
+    if soup.triangles.len() > bvh::MAX_TRIANGLES {
+        return Err(MeshSdfError::TooLarge {
+            triangles: soup.triangles.len(),
+            max: bvh::MAX_TRIANGLES,
+        });
     }
     let count = soup.positions.len();
     if let Some((triangle, &index)) = soup
