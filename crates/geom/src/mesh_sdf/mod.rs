@@ -40,6 +40,9 @@
 //! step to it is shorter than the distance to the surface (or, for containment, when no
 //! triangle's box meets the step). On open surfaces every sample evaluates `w`.
 //!
+//! Limit: at most 2²⁹ triangles ([`MeshSdfError::TooLarge`]), so that a BVH node's links fit
+//! one word beside its oriented box (`bvh.rs`).
+//!
 //! Invariant: `MeshSdf` owns everything it needs (no borrow of the soup), is `Send + Sync`, and
 //! every value is a pure function of the soup, the options and the query point (or, for
 //! samplers, the grid row): never of thread count or evaluation order.
