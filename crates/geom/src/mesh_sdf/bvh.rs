@@ -33,35 +33,46 @@ pub(super) const LEAF: usize = 2;
 const BINS: usize = 16;
 const PARALLEL: usize = 1 << 13;
 const MEDIAN_DEPTH: usize = 48;
-/// Deepest possible node (root at 0): median splits halve, and counts fit in 32 bits.
+/// Deepest possible node (root at 0): median splits halve, and counts fit in 30 bits
+/// ([`MAX_TRIANGLES`]).
 pub(super) const MAX_DEPTH: usize = MEDIAN_DEPTH + 33;
 
 /// One node, one cache line (queries are bound by memory traffic, not arithmetic): a box in
-/// the orthonormal frame `(u, v = n × u, n)`, stored in `f32` rounded outward, so it still
-/// contains the node's triangles. Nodes without an oriented box use the axis frame, where the
-/// box is the aligned one.
+/// the orthonormal frame `(u, v, n)`, stored in `f32` rounded outward, so it still contains
+/// the node's triangles. `v` is stored rather than derived as `n × u` at each box test (that
+/// cross product was a seventh of a test's arithmetic), which needs `first` and `count` packed
+/// into one word: hence [`MAX_TRIANGLES`]. Nodes without an oriented box use the axis frame,
+/// where the box is the aligned one.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 pub(super) struct Node {
     u: [f32; 3],
+    v: [f32; 3],
     n: [f32; 3],
     /// `extent[a][0] ≤ axis_a·x ≤ extent[a][1]` for the axes `u, v, n`, computed in `f64`
-    /// with the stored axes (and `v` as [`Node::axes`] derives it).
+    /// with the stored axes.
     extent: [[f32; 2]; 3],
-    /// Leaf: its first triangle; interior: its second child.
-    pub first: u32,
-    /// Leaf: its number of triangles (at least 1); interior: 0.
-    pub count: u32,
+    /// `first | count << COUNT_SHIFT`. `first`: a leaf's first triangle, an interior node's
+    /// second child; `count`: a leaf's number of triangles (1 to [`LEAF`]), 0 for interior.
+    link: u32,
 }
+
+const COUNT_SHIFT: u32 = 30;
+const FIRST_MASK: u32 = (1 << COUNT_SHIFT) - 1;
+const _: () = assert!(LEAF < 1 << (32 - COUNT_SHIFT));
+
+/// Most triangles a hierarchy takes: node and triangle indices must fit in [`FIRST_MASK`],
+/// and a tree over `n` triangles has fewer than `2n` nodes.
+pub(super) const MAX_TRIANGLES: usize = 1 << (COUNT_SHIFT - 1);
 
 impl Default for Node {
     fn default() -> Node {
         Node {
             u: [1.0, 0.0, 0.0],
+            v: [0.0, 1.0, 0.0],
             n: [0.0, 0.0, 1.0],
             extent: [[f32::NEG_INFINITY, f32::INFINITY]; 3],
-            first: 0,
-            count: 0,
+            link: 0,
         }
     }
 }
@@ -81,16 +92,39 @@ fn widen(v: [f32; 3]) -> V3 {
 }
 
 impl Node {
-    #[inline]
-    pub(super) fn is_leaf(&self) -> bool {
-        self.count > 0
+    fn leaf(first: u32, count: u32) -> Node {
+        Node {
+            link: first | count << COUNT_SHIFT,
+            ..Node::default()
+        }
     }
 
-    /// The frame `u, v, n` in `f64`; queries and construction derive `v` identically.
+    /// A leaf's first triangle, an interior node's second child.
+    #[inline(always)]
+    pub(super) fn first(&self) -> u32 {
+        self.link & FIRST_MASK
+    }
+
+    /// A leaf's number of triangles; 0 for an interior node.
+    #[inline(always)]
+    pub(super) fn count(&self) -> u32 {
+        self.link >> COUNT_SHIFT
+    }
+
+    fn set_first(&mut self, first: u32) {
+        debug_assert!(first <= FIRST_MASK);
+        self.link = (self.link & !FIRST_MASK) | first;
+    }
+
+    #[inline]
+    pub(super) fn is_leaf(&self) -> bool {
+        self.count() > 0
+    }
+
+    /// The stored frame `u, v, n` in `f64`: extents are computed with exactly these axes.
     #[inline]
     fn axes(&self) -> [V3; 3] {
-        let (u, n) = (widen(self.u), widen(self.n));
-        [u, cross(n, u), n]
+        [widen(self.u), widen(self.v), widen(self.n)]
     }
 
     /// A lower bound on the squared distance from `p` to the node's triangles, in `f64` (the
@@ -107,16 +141,17 @@ impl Node {
         d2 * (1.0 - 1e-6)
     }
 
-    /// The stored frame and extents, as they are (`f32`): `(u, n, extent)`.
+    /// The stored frame and extents, as they are (`f32`): `([u, v, n], extent)`.
     #[inline(always)]
-    pub(super) fn frame(&self) -> ([f32; 3], [f32; 3], [[f32; 2]; 3]) {
-        (self.u, self.n, self.extent)
+    pub(super) fn frame(&self) -> ([[f32; 3]; 3], [[f32; 2]; 3]) {
+        ([self.u, self.v, self.n], self.extent)
     }
 
-    /// Sets the frame `u, n` and the box of `points` in it.
+    /// Sets the frame `u, n × u, n` and the box of `points` in it.
     fn fit<'a>(&mut self, u: V3, n: V3, points: impl Iterator<Item = &'a V3>) {
         self.u = u.map(|c| c as f32);
         self.n = n.map(|c| c as f32);
+        self.v = cross(widen(self.n), widen(self.u)).map(|c| c as f32);
         let axes = self.axes();
         let mut extent = [[f64::INFINITY, f64::NEG_INFINITY]; 3];
         for v in points {
@@ -187,7 +222,7 @@ enum Built {
     Split(Box<Built>, Box<Built>),
 }
 
-/// Builds the hierarchy over `triangles` (at least one).
+/// Builds the hierarchy over `triangles` (at least one, at most [`MAX_TRIANGLES`]).
 pub(super) fn build(triangles: Vec<Tri>) -> Bvh {
     let (lo, hi) = triangles
         .par_iter()
@@ -250,18 +285,15 @@ fn subtree(items: &mut [Item], offset: usize, depth: usize) -> Built {
 fn serial(items: &mut [Item], offset: usize, depth: usize, nodes: &mut Vec<Node>) {
     let me = nodes.len();
     if items.len() <= LEAF {
-        nodes.push(Node {
-            first: offset as u32,
-            count: items.len() as u32,
-            ..Node::default()
-        });
+        nodes.push(Node::leaf(offset as u32, items.len() as u32));
         return;
     }
     nodes.push(Node::default());
     let mid = split(items, depth);
     let (left, right) = items.split_at_mut(mid);
     serial(left, offset, depth + 1, nodes);
-    nodes[me].first = nodes.len() as u32;
+    let second = nodes.len() as u32;
+    nodes[me].set_first(second);
     serial(right, offset + mid, depth + 1, nodes);
 }
 
@@ -271,7 +303,7 @@ fn flatten(built: Built, nodes: &mut Vec<Node>) {
             let base = nodes.len() as u32;
             nodes.extend(list.into_iter().map(|mut n| {
                 if !n.is_leaf() {
-                    n.first += base;
+                    n.set_first(n.first() + base);
                 }
                 n
             }));
@@ -280,7 +312,8 @@ fn flatten(built: Built, nodes: &mut Vec<Node>) {
             let me = nodes.len();
             nodes.push(Node::default());
             flatten(*l, nodes);
-            nodes[me].first = nodes.len() as u32;
+            let second = nodes.len() as u32;
+            nodes[me].set_first(second);
             flatten(*r, nodes);
         }
     }
@@ -372,7 +405,7 @@ fn fit_bounds(nodes: &mut [Node], triangles: &[Tri]) -> Vec<Aabb> {
     for i in (0..nodes.len()).rev() {
         let node = nodes[i];
         exact[i] = if node.is_leaf() {
-            let tris = &triangles[node.first as usize..(node.first + node.count) as usize];
+            let tris = &triangles[node.first() as usize..(node.first() + node.count()) as usize];
             tris.iter().fold(
                 ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
                 |(lo, hi), t| {
@@ -383,7 +416,7 @@ fn fit_bounds(nodes: &mut [Node], triangles: &[Tri]) -> Vec<Aabb> {
                 },
             )
         } else {
-            let (l, r) = (exact[i + 1], exact[node.first as usize]);
+            let (l, r) = (exact[i + 1], exact[node.first() as usize]);
             (min(l.0, r.0), max(l.1, r.1))
         };
     }
@@ -416,14 +449,14 @@ fn fit_oriented(nodes: &mut [Node], triangles: &[Tri]) {
     for i in (0..nodes.len()).rev() {
         let node = nodes[i];
         if node.is_leaf() {
-            range[i] = (node.first, node.first + node.count);
-            area[i] = triangles[node.first as usize..(node.first + node.count) as usize]
+            range[i] = (node.first(), node.first() + node.count());
+            area[i] = triangles[node.first() as usize..(node.first() + node.count()) as usize]
                 .iter()
                 .fold([0.0; 3], |a, t| {
                     add(a, cross(sub(t[1], t[0]), sub(t[2], t[0])))
                 });
         } else {
-            let (l, r) = (i + 1, node.first as usize);
+            let (l, r) = (i + 1, node.first() as usize);
             range[i] = (range[l].0, range[r].1);
             area[i] = add(area[l], area[r]);
         }
@@ -459,20 +492,20 @@ mod tests {
         assert!(depth <= MAX_DEPTH);
         let n = bvh.nodes[i];
         if n.is_leaf() {
-            assert!((1..=LEAF as u32).contains(&n.count));
-            for t in &bvh.triangles[n.first as usize..(n.first + n.count) as usize] {
+            assert!((1..=LEAF as u32).contains(&n.count()));
+            for t in &bvh.triangles[n.first() as usize..(n.first() + n.count()) as usize] {
                 for p in t {
                     let b = bvh.boxes[i];
                     assert!((0..3).all(|a| b.lo()[a] <= p[a] && p[a] <= b.hi()[a]));
                     assert!(n.dist2(*p) < 1e-20);
                 }
             }
-            for s in n.first..n.first + n.count {
+            for s in n.first()..n.first() + n.count() {
                 assert!(!seen[s as usize], "triangle {s} in two leaves");
                 seen[s as usize] = true;
             }
         } else {
-            for c in [i + 1, n.first as usize] {
+            for c in [i + 1, n.first() as usize] {
                 assert!(c > i);
                 let (b, cb) = (bvh.boxes[i], bvh.boxes[c]);
                 assert!((0..3).all(|a| b.lo()[a] <= cb.lo()[a] && cb.hi()[a] <= b.hi()[a]));

@@ -40,11 +40,15 @@
 //! step to it is shorter than the distance to the surface (or, for containment, when no
 //! triangle's box meets the step). On open surfaces every sample evaluates `w`.
 //!
+//! Limit: at most 2²⁹ triangles ([`MeshSdfError::TooLarge`]), so that a BVH node's links fit
+//! one word beside its oriented box (`bvh.rs`).
+//!
 //! Invariant: `MeshSdf` owns everything it needs (no borrow of the soup), is `Send + Sync`, and
 //! every value is a pure function of the soup, the options and the query point (or, for
 //! samplers, the grid row): never of thread count or evaluation order.
 
 mod bvh;
+mod lanes;
 mod nearest;
 mod prepare;
 mod sampler;
@@ -108,6 +112,8 @@ pub enum MeshSdfError {
         index: u32,
         count: usize,
     },
+    #[error("the mesh has {triangles} triangles, more than the {max} supported")]
+    TooLarge { triangles: usize, max: usize },
     #[error("vertex {vertex} has a non-finite coordinate")]
     NonFinite { vertex: usize },
     #[error("{what} must be {expected}, got {value}")]
@@ -257,6 +263,12 @@ fn check_options(options: &SdfOptions) -> Result<(), MeshSdfError> {
 fn check_soup(soup: &TriangleSoup) -> Result<(), MeshSdfError> {
     if soup.triangles.is_empty() {
         return Err(MeshSdfError::Empty);
+    }
+    if soup.triangles.len() > bvh::MAX_TRIANGLES {
+        return Err(MeshSdfError::TooLarge {
+            triangles: soup.triangles.len(),
+            max: bvh::MAX_TRIANGLES,
+        });
     }
     let count = soup.positions.len();
     if let Some((triangle, &index)) = soup

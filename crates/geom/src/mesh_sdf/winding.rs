@@ -57,7 +57,7 @@ pub(super) fn moments(bvh: &Bvh) -> Vec<Moments> {
         .zip(nodes.par_iter())
         .filter(|(_, node)| node.is_leaf())
         .for_each(|((m, r), node)| {
-            let range = node.first as usize..(node.first + node.count) as usize;
+            let range = node.first() as usize..(node.first() + node.count()) as usize;
             (*m, *r) = leaf_moments(&bvh.triangles[range]);
         });
     for i in (0..nodes.len()).rev() {
@@ -65,7 +65,7 @@ pub(super) fn moments(bvh: &Bvh) -> Vec<Moments> {
         if node.is_leaf() {
             continue;
         }
-        let (l, rr) = (i + 1, node.first as usize);
+        let (l, rr) = (i + 1, node.first() as usize);
         let m = combine(&out[l], &out[rr]);
         let through_children = [l, rr]
             .map(|c| norm(sub(out[c].center, m.center)) + radius[c])
@@ -234,11 +234,11 @@ pub(super) fn fast(bvh: &Bvh, moments: &[Moments], q: V3, beta2: f64) -> f64 {
         }
         let node = &bvh.nodes[i];
         if node.is_leaf() {
-            for t in &bvh.triangles[node.first as usize..(node.first + node.count) as usize] {
+            for t in &bvh.triangles[node.first() as usize..(node.first() + node.count()) as usize] {
                 sum += solid_angle(t, q);
             }
         } else {
-            stack[top] = node.first;
+            stack[top] = node.first();
             stack[top + 1] = i as u32 + 1;
             top += 2;
         }
