@@ -65,7 +65,6 @@ pub enum TileOutput {
     Chunked(ChunkedHead),
 }
 
-
 /// Where the scaffold comes from.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ScaffoldInput {
