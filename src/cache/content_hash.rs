@@ -30,6 +30,13 @@ impl ContentHash {
         ContentHash::of_parts(&[bytes])
     }
 
+    /// Hashes `bytes` on the calling thread only. For threads outside the rayon pool that
+    /// rayon workers wait on (the builder's chunk writer): asking the pool for help there
+    /// deadlocks once every worker is blocked sending it chunks.
+    pub fn of_serial(bytes: &[u8]) -> ContentHash {
+        ContentHash(*blake3::hash(bytes).as_bytes())
+    }
+
     /// Hashes the concatenation of `parts` without concatenating them.
     pub fn of_parts(parts: &[&[u8]]) -> ContentHash {
         let mut hasher = blake3::Hasher::new();

@@ -115,9 +115,11 @@ pub struct ChunkedWriter<W: Write> {
     chunks: Vec<ChunkEntry>,
 }
 
+/// Writes and hashes a section. Serial: this runs on the builder's chunk writer, a thread the
+/// tiling's rayon workers wait on (see [`ContentHash::of_serial`]).
 fn hashed(out: &mut impl Write, bytes: &[u8]) -> io::Result<ContentHash> {
     out.write_all(bytes)?;
-    Ok(ContentHash::of(bytes))
+    Ok(ContentHash::of_serial(bytes))
 }
 
 impl<W: Write> ChunkedWriter<W> {
@@ -188,7 +190,8 @@ impl<W: Write> ChunkedWriter<W> {
         };
         let json = serde_json::to_vec(&trailer).map_err(io::Error::other)?;
         self.out.write_all(&json)?;
-        self.out.write_all(ContentHash::of(&json).as_bytes())?;
+        self.out
+            .write_all(ContentHash::of_serial(&json).as_bytes())?;
         self.out.write_all(&(json.len() as u64).to_le_bytes())?;
         Ok((self.out, trailer))
     }
