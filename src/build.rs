@@ -14,22 +14,28 @@
 //!   and its value is a handle on that entry ([`Value::Chunked`]: the open file and its
 //!   verified trailer), which the write stage reads a chunk at a time. A chunk found corrupt
 //!   while a write reads it removes the entry and reruns the tile node, then the write.
+//! - Single-pass formats (STL) of a write node this build needs are written while the tiling
+//!   runs, from the same chunks, by a thread of their own ([`Prewritten`]); the write stage
+//!   only puts them in place, and only when its input is the mesh they were written from
+//!   (same hash). Unused ones are removed when the build ends: the sink's files stay whole or
+//!   absent.
 
 use std::collections::{HashMap, HashSet};
-use std::sync::Arc;
 use std::sync::mpsc;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use rayon::prelude::*;
 
 use latticebuild_geom::mesh::MeshChunk;
+use latticebuild_geom::mesh_io::{Format, StlStream, Workers};
 
 use crate::cache::{Cache, CacheError, ContentHash, EntryReader, Key, Lookup, Opened, explain};
 use crate::graph::{Graph, NodeId};
 use crate::stages::chunked::{ChunkedMesh, ChunkedWriter, is_chunked};
 use crate::stages::tile::TileOutput;
 use crate::stages::write::{MeshInput, WriteError};
-use crate::stages::{MeshArtifact, OutputSink, Stage, WrittenOutput};
+use crate::stages::{MeshArtifact, OutputSink, PendingFile, Prewritten, Stage, WrittenOutput};
 
 /// Shows the progress of long stages; see [`crate::progress`].
 pub trait Progress: Sync {
@@ -126,6 +132,13 @@ impl From<&str> for Failure {
 /// one being made and one being written, memory holds about three chunks.
 const CHUNKS_IN_FLIGHT: usize = 1;
 
+/// A thread writing write node `node`'s STL file from the chunks it is sent.
+struct Prewriter<'scope> {
+    node: NodeId,
+    send: mpsc::SyncSender<Arc<MeshChunk>>,
+    thread: std::thread::ScopedJoinHandle<'scope, Option<Box<dyn PendingFile>>>,
+}
+
 struct Resolved {
     key: Key,
     hash: ContentHash,
@@ -139,6 +152,10 @@ pub struct Builder<'a> {
     pub progress: &'a dyn Progress,
     resolved: HashMap<NodeId, Resolved>,
     runs: HashMap<NodeId, NodeRun>,
+    /// The nodes this build resolves.
+    needed: HashSet<NodeId>,
+    /// Files written while a tiling ran, by write node, with the hash of the mesh they hold.
+    prewritten: Mutex<HashMap<NodeId, (ContentHash, Vec<Prewritten>)>>,
 }
 
 impl<'a> Builder<'a> {
@@ -155,6 +172,8 @@ impl<'a> Builder<'a> {
             progress,
             resolved: HashMap::new(),
             runs: HashMap::new(),
+            needed: HashSet::new(),
+            prewritten: Mutex::new(HashMap::new()),
         }
     }
 
@@ -207,6 +226,7 @@ impl<'a> Builder<'a> {
 
     /// Runs `needed` (closed under inputs, in order) level by level, then collects garbage.
     fn run_nodes(&mut self, needed: &[NodeId]) -> Result<(), BuildError> {
+        self.needed = needed.iter().copied().collect();
         let mut level = vec![0usize; self.graph.nodes.len()];
         for &id in needed {
             level[id] = self.graph.nodes[id]
@@ -558,6 +578,7 @@ impl<'a> Builder<'a> {
     /// committed only if the stage succeeds; a whole mesh (2D) comes back as it is.
     fn run_tile(
         &self,
+        id: NodeId,
         stage: &crate::stages::tile::TileStage,
         name: &str,
         key: &Key,
@@ -567,7 +588,8 @@ impl<'a> Builder<'a> {
         let cache = self.cache;
         let progress = self.progress.start(name, 0);
         std::thread::scope(|scope| {
-            let (send, receive) = mpsc::sync_channel::<MeshChunk>(CHUNKS_IN_FLIGHT);
+            let prewriters = self.begin_prewrites(id, scope);
+            let (send, receive) = mpsc::sync_channel::<Arc<MeshChunk>>(CHUNKS_IN_FLIGHT);
             let writer = scope.spawn(move || -> Result<_, String> {
                 // Begun on the first chunk, so a 2D tiling makes no temporary file.
                 let mut writer = None;
@@ -584,10 +606,16 @@ impl<'a> Builder<'a> {
                 Ok(writer)
             });
             let output = stage.run(cells, file, &*progress, &mut |chunk| {
+                let chunk = Arc::new(chunk);
+                for prewriter in &prewriters {
+                    // A stopped prewriter only means its file is written again later.
+                    let _ = prewriter.send.send(Arc::clone(&chunk));
+                }
                 send.send(chunk)
                     .map_err(|_| "the cache writer stopped".to_string())
             });
             drop(send);
+            let prewritten = self.finish_prewrites(prewriters);
             let written = writer
                 .join()
                 .map_err(|_| "the cache writer panicked".to_string())?;
@@ -601,7 +629,18 @@ impl<'a> Builder<'a> {
                         .map_err(|e| format!("cannot write the cache entry: {e}"))?;
                     pending.commit().map_err(|e| e.to_string())?;
                     match self.open_chunked(key).map_err(|e| e.to_string())? {
-                        Some(value) => Ok(value),
+                        Some(value) => {
+                            if let Value::Chunked(mesh) = &value {
+                                let hash = mesh.source().hash();
+                                let mut ready = self.prewritten.lock().map_err(|_| {
+                                    "a thread writing files early panicked".to_string()
+                                })?;
+                                for (node, files) in prewritten {
+                                    ready.insert(node, (hash, files));
+                                }
+                            }
+                            Ok(value)
+                        }
                         None => Err("the cache entry just written cannot be read back".into()),
                     }
                 }
@@ -611,6 +650,74 @@ impl<'a> Builder<'a> {
                 }
             }
         })
+    }
+
+    /// Starts a thread per single-pass file of the write nodes this build needs that read
+    /// tile node `tile`, each writing its file from the chunks it is sent. Encoded on the
+    /// thread itself ([`Workers::Caller`]): the rayon threads may all be blocked sending it
+    /// chunks. A file that cannot be begun is simply written later by the write stage.
+    fn begin_prewrites<'scope, 'env>(
+        &'env self,
+        tile: NodeId,
+        scope: &'scope std::thread::Scope<'scope, 'env>,
+    ) -> Vec<Prewriter<'scope>> {
+        let mut prewriters = Vec::new();
+        for (node, n) in self.graph.nodes.iter().enumerate() {
+            let Stage::Write(write) = &n.stage else {
+                continue;
+            };
+            if n.inputs.first() != Some(&tile) || !self.needed.contains(&node) {
+                continue;
+            }
+            if !write.formats.contains(&Format::Stl) {
+                continue;
+            }
+            let Ok(mut file) = self.sink.begin_file(&write.path(Format::Stl)) else {
+                continue;
+            };
+            let encoding = write.encoding;
+            let (send, receive) = mpsc::sync_channel::<Arc<MeshChunk>>(CHUNKS_IN_FLIGHT);
+            let thread = scope.spawn(move || {
+                let mut stream = StlStream::begin(encoding, Workers::Caller, &mut file).ok()?;
+                for chunk in receive {
+                    stream.push(&chunk, &mut file).ok()?;
+                }
+                stream.finish(&mut file).ok()?;
+                Some(file)
+            });
+            prewriters.push(Prewriter { node, send, thread });
+        }
+        prewriters
+    }
+
+    /// The files the prewriters wrote whole, by write node (dropped ones are removed).
+    fn finish_prewrites(&self, prewriters: Vec<Prewriter>) -> Vec<(NodeId, Vec<Prewritten>)> {
+        let mut done: Vec<(NodeId, Vec<Prewritten>)> = Vec::new();
+        for Prewriter { node, send, thread } in prewriters {
+            drop(send);
+            if let Ok(Some(file)) = thread.join() {
+                let prewritten = Prewritten {
+                    format: Format::Stl,
+                    file,
+                };
+                match done.iter_mut().find(|(n, _)| *n == node) {
+                    Some((_, files)) => files.push(prewritten),
+                    None => done.push((node, vec![prewritten])),
+                }
+            }
+        }
+        done
+    }
+
+    /// The files written early for write node `id`, if they hold the mesh `input` hashes to.
+    fn take_prewritten(&self, id: NodeId, input: ContentHash) -> Vec<Prewritten> {
+        let Ok(mut ready) = self.prewritten.lock() else {
+            return Vec::new();
+        };
+        match ready.remove(&id) {
+            Some((hash, files)) if hash == input => files,
+            _ => Vec::new(),
+        }
     }
 
     /// Runs node `id`'s stage (keyed `key`) on its inputs' values, which must be loaded.
@@ -671,17 +778,19 @@ impl<'a> Builder<'a> {
                     .collect::<Result<Vec<_>, _>>()?;
                 let slices: Vec<&[u8]> = inputs.iter().map(|b| b.as_slice()).collect();
                 let (cells, file) = slices.split_at(stage.cell_inputs().min(slices.len()));
-                self.run_tile(stage, &node.name, key, cells, file.first().copied())
+                self.run_tile(id, stage, &node.name, key, cells, file.first().copied())
             }
             Stage::Write(stage) => {
+                let prewritten = self.take_prewritten(id, self.resolved[&node.inputs[0]].hash);
                 let input = match input(0) {
-                    Value::Mesh(mesh) => stage.run(MeshInput::Whole(&mesh), self.sink),
+                    Value::Mesh(mesh) => stage.run(MeshInput::Whole(&mesh), self.sink, prewritten),
                     Value::Chunked(mesh) => stage.run(
                         MeshInput::Chunked {
                             chunks: &*mesh,
                             head: &mesh.trailer.head,
                         },
                         self.sink,
+                        prewritten,
                     ),
                     _ => return Err(Failure::Message("input is not a mesh".into())),
                 };

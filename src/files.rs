@@ -7,11 +7,11 @@
 //! (Cache keys never involve times; this only decides whether a file must be written again.)
 
 use std::fs::{self, File};
-use std::io::{self, BufWriter, Write};
+use std::io::{self, BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use crate::stages::{OutputSink, WrittenFile};
+use crate::stages::{OutputSink, PendingFile, WrittenFile};
 
 /// Writes output files under one directory.
 pub struct OutputDir {
@@ -47,12 +47,8 @@ pub fn modified_ns(path: &Path) -> Option<u64> {
     u64::try_from(since.as_nanos()).ok()
 }
 
-/// Writes `path` atomically from `fill`: a temporary file beside it, renamed on success and
-/// removed on failure. Returns the size of what was written.
-pub fn write_atomically(
-    path: &Path,
-    fill: &mut dyn FnMut(&mut dyn Write) -> io::Result<()>,
-) -> io::Result<u64> {
+/// A fresh temporary name beside `path` (whose directory is created).
+fn temporary_beside(path: &Path) -> io::Result<PathBuf> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
     let dir = path
         .parent()
@@ -63,11 +59,20 @@ pub fn write_atomically(
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let temp = dir.join(format!(
+    Ok(dir.join(format!(
         ".{name}.tmp-{}-{}",
         std::process::id(),
         COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
+    )))
+}
+
+/// Writes `path` atomically from `fill`: a temporary file beside it, renamed on success and
+/// removed on failure. Returns the size of what was written.
+pub fn write_atomically(
+    path: &Path,
+    fill: &mut dyn FnMut(&mut dyn Write) -> io::Result<()>,
+) -> io::Result<u64> {
+    let temp = temporary_beside(path)?;
     let result = (|| {
         let file = File::create(&temp)?;
         let mut writer = CountingWriter {
@@ -98,9 +103,86 @@ impl OutputSink for OutputDir {
         Ok((bytes, modified_ns(&path).unwrap_or(0)))
     }
 
+    fn begin_file(&self, relative: &str) -> io::Result<Box<dyn PendingFile>> {
+        let path = self.dir.join(relative);
+        let temp = temporary_beside(&path)?;
+        let file = File::create(&temp)?;
+        Ok(Box::new(PendingOutput {
+            writer: Some(BufWriter::with_capacity(1 << 20, file)),
+            temp,
+            path,
+        }))
+    }
+
     fn holds(&self, file: &WrittenFile) -> bool {
         let path = self.dir.join(&file.path);
         fs::metadata(&path).map(|m| m.len()).ok() == Some(file.bytes)
             && modified_ns(&path) == Some(file.modified_ns)
+    }
+}
+
+/// A file being written under its temporary name: renamed into place by `commit`, removed
+/// when dropped before (a failed or unused early write leaves nothing behind).
+struct PendingOutput {
+    /// `None` once committed.
+    writer: Option<BufWriter<File>>,
+    temp: PathBuf,
+    path: PathBuf,
+}
+
+impl PendingOutput {
+    fn writer(&mut self) -> io::Result<&mut BufWriter<File>> {
+        self.writer
+            .as_mut()
+            .ok_or_else(|| io::Error::other("the file was already committed"))
+    }
+}
+
+impl Write for PendingOutput {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        self.writer()?.write(buf)
+    }
+    fn write_all(&mut self, buf: &[u8]) -> io::Result<()> {
+        self.writer()?.write_all(buf)
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        self.writer()?.flush()
+    }
+}
+
+impl Seek for PendingOutput {
+    fn seek(&mut self, to: SeekFrom) -> io::Result<u64> {
+        self.writer()?.seek(to)
+    }
+}
+
+impl PendingFile for PendingOutput {
+    fn commit(mut self: Box<Self>) -> io::Result<(u64, u64)> {
+        let mut writer = self
+            .writer
+            .take()
+            .ok_or_else(|| io::Error::other("the file was already committed"))?;
+        let placed = (|| {
+            writer.flush()?;
+            let bytes = writer.get_ref().metadata()?.len();
+            drop(writer);
+            fs::rename(&self.temp, &self.path)?;
+            Ok(bytes)
+        })();
+        match placed {
+            Ok(bytes) => Ok((bytes, modified_ns(&self.path).unwrap_or(0))),
+            Err(e) => {
+                let _ = fs::remove_file(&self.temp);
+                Err(e)
+            }
+        }
+    }
+}
+
+impl Drop for PendingOutput {
+    fn drop(&mut self) {
+        if self.writer.take().is_some() {
+            let _ = fs::remove_file(&self.temp);
+        }
     }
 }

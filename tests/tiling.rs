@@ -85,6 +85,71 @@ fn a_format_change_rewrites_without_retiling() {
     assert_eq!(ran(&skin), ["tile:a", "write:a"]);
 }
 
+/// Files in the output directory that are not in place: temporaries of unused early writes.
+fn temporaries(p: &Project) -> Vec<String> {
+    let dir = p.out("a.stl");
+    let dir = dir.parent().expect("out dir");
+    std::fs::read_dir(dir)
+        .expect("out dir")
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|name| name.starts_with('.'))
+        .collect()
+}
+
+#[test]
+fn stl_written_while_tiling_is_the_file_written_from_the_cache() {
+    // A tiling's STL is written from its chunks while the tiling runs; a write-only rerun
+    // writes it from the cache entry. Both must be the same bytes, in both encodings.
+    let p = Project::new(GRID);
+    for (ascii, resolution) in [("false", "12"), ("true", "10")] {
+        let ascii_key = format!("outputs.a.ascii={ascii}");
+        let resolution = format!("outputs.a.resolution={resolution}");
+        let first = p.build(&["--set", &ascii_key, "--set", &resolution]);
+        assert!(ran(&first).contains(&"tile:a".to_string()), "{ascii}");
+        let early = std::fs::read(p.out("a.stl")).expect("stl");
+        let formats = p.build(&[
+            "--set",
+            &ascii_key,
+            "--set",
+            &resolution,
+            "--set",
+            "outputs.a.formats=[\"stl\", \"ply\"]",
+        ]);
+        assert_eq!(ran(&formats), ["write:a"], "{ascii}");
+        let late = std::fs::read(p.out("a.stl")).expect("stl");
+        assert!(early == late, "ascii = {ascii}: the early STL differs");
+        assert!(temporaries(&p).is_empty(), "{:?}", temporaries(&p));
+    }
+}
+
+#[test]
+fn an_early_stl_of_an_unchanged_mesh_is_dropped() {
+    // The scaffold's bytes change but not its mesh (a comment section): the tiling reruns
+    // and writes an STL early, the write stage is cached, and the early file is removed
+    // without touching the one in place.
+    let p = Project::new(FILE);
+    let bytes = data("box_4x3x2_hex8.msh");
+    std::fs::write(p.path().join("box.msh"), &bytes).expect("write");
+    p.build(&[]);
+    let placed = std::fs::metadata(p.out("a.stl")).expect("stl");
+    let text = String::from_utf8(bytes).expect("ascii");
+    let commented = text.replacen(
+        "$EndMeshFormat\n",
+        "$EndMeshFormat\n$Comments\nsame mesh\n$EndComments\n",
+        1,
+    );
+    assert_ne!(commented, text);
+    p.write("box.msh", &commented);
+    assert_eq!(ran(&p.build(&[])), ["file:box.msh", "tile:a"]);
+    let after = std::fs::metadata(p.out("a.stl")).expect("stl");
+    assert_eq!(
+        after.modified().expect("mtime"),
+        placed.modified().expect("mtime")
+    );
+    assert!(temporaries(&p).is_empty(), "{:?}", temporaries(&p));
+}
+
 const FILE: &str = r#"
 [cells.p]
 tpms = "p"

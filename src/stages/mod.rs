@@ -38,7 +38,7 @@ use crate::cache::{ContentHash, Key, KeyBuilder, KeyDescription, KeyError};
 use crate::manifest::{Cell, Output};
 
 pub use artifact::{MeshArtifact, MeshSummary, TilingSummary, WrittenFile, WrittenOutput};
-pub use write::OutputSink;
+pub use write::{OutputSink, PendingFile, Prewritten};
 
 /// One node's computation, with its parameters.
 #[derive(Clone, Debug, PartialEq)]

@@ -6,7 +6,7 @@
 //! being written are discarded (the sink renames only whole files) and the builder reruns the
 //! node that made the mesh.
 
-use std::io::{self, Write};
+use std::io::{self, Seek, Write};
 
 use rayon::prelude::*;
 
@@ -33,6 +33,24 @@ pub trait OutputSink: Sync {
 
     /// Whether `file` is still on disk as it was written (same size and modification time).
     fn holds(&self, file: &WrittenFile) -> bool;
+
+    /// Starts `relative` as a pending file, written (and sought in) through the handle while
+    /// the mesh is still being made: renamed into place by [`PendingFile::commit`], removed
+    /// if dropped uncommitted.
+    fn begin_file(&self, relative: &str) -> io::Result<Box<dyn PendingFile>>;
+}
+
+/// A file of the sink being written, not yet in place.
+pub trait PendingFile: Write + Seek + Send {
+    /// Puts the file in place; its size and modification time (ns since the epoch).
+    fn commit(self: Box<Self>) -> io::Result<(u64, u64)>;
+}
+
+/// A file written while its mesh was made (see `Builder`), for the write stage to put in place
+/// instead of writing it again: the same bytes, since it was written from the same chunks.
+pub struct Prewritten {
+    pub format: Format,
+    pub file: Box<dyn PendingFile>,
 }
 
 /// The mesh the write stage writes.
@@ -85,33 +103,48 @@ impl WriteStage {
         format!("{}.{}", self.stem, format.name())
     }
 
-    /// Writes every format (in parallel: each writer streams on its own).
+    /// Writes every format (in parallel: each writer streams on its own); a format in
+    /// `prewritten` is only put in place.
     pub fn run(
         &self,
         input: MeshInput,
         sink: &dyn OutputSink,
+        prewritten: Vec<Prewritten>,
     ) -> Result<WrittenOutput, WriteError> {
-        let files = self
+        let mut prewritten = prewritten;
+        let jobs: Vec<(Format, Option<Box<dyn PendingFile>>)> = self
             .formats
-            .par_iter()
+            .iter()
             .map(|&format| {
+                let ready = prewritten
+                    .iter()
+                    .position(|p| p.format == format)
+                    .map(|i| prewritten.swap_remove(i).file);
+                (format, ready)
+            })
+            .collect();
+        let files = jobs
+            .into_par_iter()
+            .map(|(format, ready)| {
                 let path = self.path(format);
-                let (bytes, modified_ns) = sink
-                    .write_file(&path, &mut |w| match input {
+                let written = match ready {
+                    Some(file) => file.commit(),
+                    None => sink.write_file(&path, &mut |w| match input {
                         MeshInput::Whole(artifact) => {
                             mesh_io::write_mesh(&artifact.mesh, format, self.encoding, w)
                         }
                         MeshInput::Chunked { chunks, .. } => {
                             mesh_io::write_chunked(chunks, format, self.encoding, w)
                         }
-                    })
-                    .map_err(|e| {
-                        if is_corrupt(&e) {
-                            WriteError::CorruptInput(e.to_string())
-                        } else {
-                            WriteError::Failed(format!("cannot write `{path}`: {e}"))
-                        }
-                    })?;
+                    }),
+                };
+                let (bytes, modified_ns) = written.map_err(|e| {
+                    if is_corrupt(&e) {
+                        WriteError::CorruptInput(e.to_string())
+                    } else {
+                        WriteError::Failed(format!("cannot write `{path}`: {e}"))
+                    }
+                })?;
                 Ok(WrittenFile {
                     path,
                     format: format.name().to_string(),

@@ -13,9 +13,12 @@
 //!   borrowed vertices while encoding: one that does not resolve fails the call after the
 //!   chunk's bytes. Either way a bad chunk fails the call and the caller discards the output.
 
-use super::{Encoding, Format, check_finite, check_indices, obj, off, ply, stl, vtk};
+use super::encode::Workers;
+use super::{
+    Encoding, Format, check_finite, check_finite_by, check_indices, obj, off, ply, stl, vtk,
+};
 use crate::mesh::MeshChunk;
-use std::io::{self, Write};
+use std::io::{self, Seek, SeekFrom, Write};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Which arrays of each chunk a pass reads. A source may leave the others empty (but always
@@ -77,36 +80,7 @@ pub fn write_chunked(
         Format::Stl => {
             stl::header(nt, encoding, out)?;
             facets(source, nt, &mut |chunk, done| {
-                let positions = Positions::of(chunk);
-                // Resolved once, while encoding (a separate check doubled the cost of the
-                // random lookups of borrowed ids); a miss fails the call after this chunk's
-                // bytes, which the caller discards with the rest of the partial file.
-                let missing = AtomicBool::new(false);
-                stl::facets(
-                    &chunk.triangles,
-                    |i| {
-                        positions.get(i).unwrap_or_else(|| {
-                            missing.store(true, Ordering::Relaxed);
-                            [0.0; 3]
-                        })
-                    },
-                    encoding,
-                    out,
-                )?;
-                if missing.load(Ordering::Relaxed) {
-                    let resolves = |tri: &[u32; 3]| tri.iter().all(|&i| positions.get(i).is_some());
-                    let t = chunk
-                        .triangles
-                        .iter()
-                        .position(|tri| !resolves(tri))
-                        .unwrap_or(0);
-                    return Err(invalid(format!(
-                        "triangle {} {:?} uses a vertex its chunk neither has nor borrows",
-                        done + t as u64,
-                        chunk.triangles.get(t).copied().unwrap_or_default()
-                    )));
-                }
-                Ok(())
+                stl_facets(chunk, done, encoding, Workers::Pool, out)
             })?;
             stl::footer(encoding, out)?;
         }
@@ -134,6 +108,118 @@ pub fn write_chunked(
         }
     }
     out.flush()
+}
+
+/// `chunk`'s STL facets, `done` triangles into the mesh. Corners are resolved once, while
+/// encoding (a separate check doubled the cost of the random lookups of borrowed ids); a miss
+/// fails the call after this chunk's bytes, which the caller discards with the rest of the
+/// partial file.
+fn stl_facets(
+    chunk: &MeshChunk,
+    done: u64,
+    encoding: Encoding,
+    workers: Workers,
+    out: &mut dyn Write,
+) -> io::Result<()> {
+    let positions = Positions::of(chunk);
+    let missing = AtomicBool::new(false);
+    stl::facets(
+        &chunk.triangles,
+        |i| {
+            positions.get(i).unwrap_or_else(|| {
+                missing.store(true, Ordering::Relaxed);
+                [0.0; 3]
+            })
+        },
+        encoding,
+        workers,
+        out,
+    )?;
+    if missing.load(Ordering::Relaxed) {
+        let resolves = |tri: &[u32; 3]| tri.iter().all(|&i| positions.get(i).is_some());
+        let t = chunk
+            .triangles
+            .iter()
+            .position(|tri| !resolves(tri))
+            .unwrap_or(0);
+        return Err(invalid(format!(
+            "triangle {} {:?} uses a vertex its chunk neither has nor borrows",
+            done + t as u64,
+            chunk.triangles.get(t).copied().unwrap_or_default()
+        )));
+    }
+    Ok(())
+}
+
+/// An STL file written a chunk at a time while the chunks are still being made, before the
+/// facet count is known: the bytes [`write_chunked`] writes for the same chunks. A binary
+/// header is written with a count of 0 and patched by [`StlStream::finish`], so the output
+/// must seek; ASCII has no count.
+#[derive(Debug)]
+pub struct StlStream {
+    encoding: Encoding,
+    workers: Workers,
+    /// Triangles and vertices written so far.
+    triangles: u64,
+    vertices: u64,
+}
+
+impl StlStream {
+    /// Writes the header; `workers` encode the facets.
+    pub fn begin(
+        encoding: Encoding,
+        workers: Workers,
+        out: &mut dyn Write,
+    ) -> io::Result<StlStream> {
+        stl::header(0, encoding, out)?;
+        Ok(StlStream {
+            encoding,
+            workers,
+            triangles: 0,
+            vertices: 0,
+        })
+    }
+
+    /// Appends `chunk`'s facets, checked as [`write_chunked`] checks them.
+    pub fn push(&mut self, chunk: &MeshChunk, out: &mut dyn Write) -> io::Result<()> {
+        check_facet_chunk(chunk, &mut self.vertices, self.workers)?;
+        stl_facets(chunk, self.triangles, self.encoding, self.workers, out)?;
+        self.triangles += chunk.triangles.len() as u64;
+        Ok(())
+    }
+
+    /// Ends the file: the footer, and the binary facet count at its place in the header.
+    pub fn finish<W: Write + Seek>(self, out: &mut W) -> io::Result<()> {
+        stl::footer(self.encoding, out)?;
+        if self.encoding == Encoding::Binary {
+            let end = out.stream_position()?;
+            let mut header = Vec::with_capacity(84);
+            stl::header(self.triangles, self.encoding, &mut header)?;
+            out.seek(SeekFrom::Start(80))?;
+            out.write_all(&header[80..])?;
+            out.seek(SeekFrom::Start(end))?;
+        }
+        out.flush()
+    }
+}
+
+/// What every chunk of the facet pass must be: ids continuing at `next` (advanced past this
+/// chunk), own and borrowed positions finite.
+fn check_facet_chunk(chunk: &MeshChunk, next: &mut u64, workers: Workers) -> io::Result<()> {
+    if u64::from(chunk.first_vertex) != *next {
+        return Err(invalid(format!(
+            "a chunk starts at vertex {} where {next} was expected",
+            chunk.first_vertex
+        )));
+    }
+    *next += chunk.vertices.len() as u64;
+    check_finite_by(workers, &chunk.vertices, u64::from(chunk.first_vertex))?;
+    // One fold, not a check per entry: a chunk may borrow a million positions.
+    let finite = |p: &[f32; 3]| p.iter().all(|c| c.is_finite());
+    if let Some(&(id, p)) = chunk.borrowed.iter().find(|(_, p)| !finite(p)) {
+        check_finite(&[p], u64::from(id))?;
+    }
+    Ok(())
 }
 
 /// The vertex pass: each chunk's vertices, checked, in id order, adding up to `nv`.
@@ -196,19 +282,7 @@ fn facets(
     let mut done = 0u64;
     let mut next = 0u64;
     source.for_each_chunk(Pass::Facets, &mut |chunk| {
-        if u64::from(chunk.first_vertex) != next {
-            return Err(invalid(format!(
-                "a chunk starts at vertex {} where {next} was expected",
-                chunk.first_vertex
-            )));
-        }
-        next += chunk.vertices.len() as u64;
-        check_finite(&chunk.vertices, u64::from(chunk.first_vertex))?;
-        // One fold, not a check per entry: a chunk may borrow a million positions.
-        let finite = |p: &[f32; 3]| p.iter().all(|c| c.is_finite());
-        if let Some(&(id, p)) = chunk.borrowed.iter().find(|(_, p)| !finite(p)) {
-            check_finite(&[p], u64::from(id))?;
-        }
+        check_facet_chunk(chunk, &mut next, Workers::Pool)?;
         let before = done;
         done += chunk.triangles.len() as u64;
         if done > nt {
@@ -389,5 +463,61 @@ mod tests {
         assert!(write(&missing, Format::Stl).is_err());
         assert!(write(&Lying(&good), Format::Off).is_err());
         assert!(write(&good, Format::Stl).is_ok());
+    }
+
+    /// An STL streamed while its chunks are made, before its facet count is known, is the
+    /// file `write_chunked` (and `write_mesh`) writes, in both encodings and for any chunking.
+    #[test]
+    fn streamed_stl_is_the_chunked_file() {
+        let mesh = mesh();
+        for encoding in [Encoding::Binary, Encoding::Ascii] {
+            let mut whole = Vec::new();
+            write_mesh(&mesh, Format::Stl, encoding, &mut whole).expect("whole");
+            for (per, workers) in [
+                (1, Workers::Caller),
+                (7, Workers::Pool),
+                (50, Workers::Caller),
+                (10_000, Workers::Pool),
+                (10_000, Workers::Caller),
+            ] {
+                let chunks = MeshChunk::split(&mesh, per);
+                let mut out = io::Cursor::new(Vec::new());
+                let mut stream = StlStream::begin(encoding, workers, &mut out).expect("begin");
+                for chunk in &chunks {
+                    stream.push(chunk, &mut out).expect("push");
+                }
+                stream.finish(&mut out).expect("finish");
+                assert!(
+                    out.into_inner() == whole,
+                    "{encoding:?}, {per} a chunk, {workers:?}"
+                );
+            }
+        }
+    }
+
+    /// A streamed chunk that does not continue the ids, or whose corner does not resolve,
+    /// fails its push.
+    #[test]
+    fn streamed_stl_refuses_bad_chunks() {
+        let chunks = MeshChunk::split(&mesh(), 50);
+        let mut out = io::Cursor::new(Vec::new());
+        let mut stream =
+            StlStream::begin(Encoding::Binary, Workers::Caller, &mut out).expect("begin");
+        assert!(
+            stream.push(&chunks[1], &mut out).is_err(),
+            "skipped chunk 0"
+        );
+        let mut stream =
+            StlStream::begin(Encoding::Binary, Workers::Caller, &mut out).expect("begin");
+        let borrows = chunks
+            .iter()
+            .position(|c| !c.borrowed.is_empty())
+            .expect("a chunk borrows");
+        for chunk in &chunks[..borrows] {
+            stream.push(chunk, &mut out).expect("push");
+        }
+        let mut missing = chunks[borrows].clone();
+        missing.borrowed.clear();
+        assert!(stream.push(&missing, &mut out).is_err());
     }
 }

@@ -15,6 +15,44 @@ pub(super) fn records_per_block(record_bytes: usize) -> usize {
     (BLOCK_BYTES / record_bytes.max(1)).max(1)
 }
 
+/// Who encodes the records of a writer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Workers {
+    /// The rayon pool, while the calling thread writes.
+    Pool,
+    /// The calling thread alone: for a thread that feeds on work the rayon pool makes, which
+    /// would deadlock waiting for pool threads blocked on feeding it.
+    Caller,
+}
+
+/// [`write_encoded`] by `workers`.
+pub(super) fn write_encoded_by<T, F>(
+    workers: Workers,
+    out: &mut dyn Write,
+    items: &[T],
+    per_block: usize,
+    encode: F,
+) -> io::Result<()>
+where
+    T: Sync,
+    F: Fn(&mut Vec<u8>, &T) + Sync,
+{
+    match workers {
+        Workers::Pool => write_encoded(out, items, per_block, encode),
+        Workers::Caller => {
+            let mut buf = Vec::new();
+            for block in items.chunks(per_block.max(1)) {
+                buf.clear();
+                for item in block {
+                    encode(&mut buf, item);
+                }
+                out.write_all(&buf)?;
+            }
+            Ok(())
+        }
+    }
+}
+
 /// Encodes `items` with `encode` and writes the result to `out`, in order.
 ///
 /// Items are cut into blocks of `per_block`; a batch of blocks is encoded in parallel on the

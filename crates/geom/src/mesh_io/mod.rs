@@ -32,7 +32,8 @@ use crate::mesh::Mesh;
 use rayon::prelude::*;
 use std::io::{self, Write};
 
-pub use chunked::{ChunkSource, Pass, write_chunked};
+pub use chunked::{ChunkSource, Pass, StlStream, write_chunked};
+pub use encode::Workers;
 pub use svg::{scaffold_svg, write_svg};
 
 /// Writes `mesh` to `out` in `format`. `encoding` chooses binary or text for STL, PLY and VTK
@@ -88,13 +89,22 @@ fn check_indices(triangles: &[[u32; 3]], n: u64, first: u64) -> io::Result<()> {
 
 /// Every coordinate of `vertices` (numbered from `first`) is finite.
 fn check_finite(vertices: &[[f32; 3]], first: u64) -> io::Result<()> {
+    check_finite_by(Workers::Pool, vertices, first)
+}
+
+/// [`check_finite`] by `workers`.
+fn check_finite_by(workers: Workers, vertices: &[[f32; 3]], first: u64) -> io::Result<()> {
     let finite = |p: &[f32; 3]| p.iter().all(|c| c.is_finite());
-    let coordinates_ok = vertices.par_chunks(CHECK_BLOCK).all(|chunk| {
+    let block_ok = |chunk: &[[f32; 3]]| {
         chunk
             .iter()
             .flatten()
             .fold(true, |ok, c| ok & c.is_finite())
-    });
+    };
+    let coordinates_ok = match workers {
+        Workers::Pool => vertices.par_chunks(CHECK_BLOCK).all(block_ok),
+        Workers::Caller => block_ok(vertices),
+    };
     if !coordinates_ok && let Some(v) = vertices.iter().position(|p| !finite(p)) {
         return Err(io::Error::new(
             io::ErrorKind::InvalidInput,

@@ -10,7 +10,7 @@
 //! area) gets the zero vector, which readers take as "compute it yourself".
 
 use super::Encoding;
-use super::encode::{push_f32, push_point, records_per_block, write_encoded};
+use super::encode::{Workers, push_f32, push_point, records_per_block, write_encoded_by};
 use crate::mesh::Mesh;
 use std::io::{self, Write};
 
@@ -26,6 +26,7 @@ pub(super) fn write(mesh: &Mesh, encoding: Encoding, out: &mut dyn Write) -> io:
         &mesh.triangles,
         |i| mesh.vertices[i as usize],
         encoding,
+        Workers::Pool,
         out,
     )?;
     footer(encoding, out)
@@ -89,13 +90,15 @@ pub(super) fn facets<P: Fn(u32) -> [f32; 3] + Sync>(
     triangles: &[[u32; 3]],
     position: P,
     encoding: Encoding,
+    workers: Workers,
     out: &mut dyn Write,
 ) -> io::Result<()> {
     // Spelled out rather than `tri.map(&position)`, which left a call per corner un-inlined
     // (4× the time of the whole-mesh writer).
     let corners = |tri: &[u32; 3]| [position(tri[0]), position(tri[1]), position(tri[2])];
     match encoding {
-        Encoding::Binary => write_encoded(
+        Encoding::Binary => write_encoded_by(
+            workers,
             out,
             triangles,
             records_per_block(FACET_BYTES),
@@ -114,7 +117,8 @@ pub(super) fn facets<P: Fn(u32) -> [f32; 3] + Sync>(
                 buf.extend_from_slice(&record);
             },
         ),
-        Encoding::Ascii => write_encoded(
+        Encoding::Ascii => write_encoded_by(
+            workers,
             out,
             triangles,
             records_per_block(ASCII_FACET_BYTES),
