@@ -1,11 +1,13 @@
 //! Chores: `cargo xtask golden [--bless]`, `cargo xtask bench [--sizes 200,400,800]
 //! [--no-peers] [--field separable|dense]`, `cargo xtask bench-mesh [triangles] [samples]`,
+//! `cargo xtask bench-tile [--resolution N] [--formats stl,ply] [--keep]`,
 //! `cargo xtask codegen [--check]`.
 //!
 //! Invariant: every generated file has a test that fails when it is stale
 //! (`tests/codegen.rs`), so generated text cannot drift from its source.
 
 mod bench_mesh;
+mod bench_tile;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
@@ -16,10 +18,12 @@ fn main() -> ExitCode {
         Some("golden") => golden(args.iter().any(|a| a == "--bless")),
         Some("bench") => bench(&args[1..]),
         Some("bench-mesh") => bench_mesh::run(&args[1..]),
+        Some("bench-tile") => bench_tile::run(&args[1..]),
         Some("codegen") => codegen(args.iter().any(|a| a == "--check")),
         _ => Err(
             "usage: cargo xtask golden [--bless] | bench [--sizes 200,400,800] [--no-peers] \
-                  [--field separable|dense] | bench-mesh [triangles] [samples] | codegen [--check]"
+                  [--field separable|dense] | bench-mesh [triangles] [samples] | bench-tile \
+                  [--resolution N] [--formats stl,ply] [--keep] | codegen [--check]"
                 .to_string(),
         ),
     };
