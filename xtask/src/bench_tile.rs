@@ -169,6 +169,12 @@ pub fn run(args: &[String]) -> Result<(), String> {
         let reports: serde_json::Value =
             serde_json::from_str(&stdout).map_err(|e| format!("report: {e}"))?;
         let r = &reports[0];
+        let reran = r["stages"].as_array().into_iter().flatten().any(|s| {
+            s["stage"].as_str().is_some_and(|n| n.starts_with("tile:")) && s["cached"] == false
+        });
+        if !reran {
+            return Err(format!("the tile stage of `{name}` did not rerun: {r}"));
+        }
         let triangles = r["triangles"].as_f64().unwrap_or(0.0);
         let tile = stage_seconds(r, "tile:");
         let write = stage_seconds(r, "write:");
