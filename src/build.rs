@@ -155,7 +155,7 @@ pub struct Builder<'a> {
     /// The nodes this build resolves.
     needed: HashSet<NodeId>,
     /// Files written while a tiling ran, by write node, with the hash of the mesh they hold.
-    prewritten: Mutex<HashMap<NodeId, (ContentHash, Vec<Prewritten>)>>,
+    prewritten: Mutex<HashMap<NodeId, (ContentHash, Prewritten)>>,
 }
 
 impl<'a> Builder<'a> {
@@ -635,8 +635,8 @@ impl<'a> Builder<'a> {
                                 let mut ready = self.prewritten.lock().map_err(|_| {
                                     "a thread writing files early panicked".to_string()
                                 })?;
-                                for (node, files) in prewritten {
-                                    ready.insert(node, (hash, files));
+                                for (node, file) in prewritten {
+                                    ready.insert(node, (hash, file));
                                 }
                             }
                             Ok(value)
@@ -691,22 +691,21 @@ impl<'a> Builder<'a> {
     }
 
     /// The files the prewriters wrote whole, by write node (dropped ones are removed).
-    fn finish_prewrites(&self, prewriters: Vec<Prewriter>) -> Vec<(NodeId, Vec<Prewritten>)> {
-        let mut done: Vec<(NodeId, Vec<Prewritten>)> = Vec::new();
-        for Prewriter { node, send, thread } in prewriters {
-            drop(send);
-            if let Ok(Some(file)) = thread.join() {
-                let prewritten = Prewritten {
-                    format: Format::Stl,
-                    file,
-                };
-                match done.iter_mut().find(|(n, _)| *n == node) {
-                    Some((_, files)) => files.push(prewritten),
-                    None => done.push((node, vec![prewritten])),
-                }
-            }
-        }
-        done
+    fn finish_prewrites(&self, prewriters: Vec<Prewriter>) -> Vec<(NodeId, Prewritten)> {
+        prewriters
+            .into_iter()
+            .filter_map(|Prewriter { node, send, thread }| {
+                drop(send);
+                let file = thread.join().ok().flatten()?;
+                Some((
+                    node,
+                    Prewritten {
+                        format: Format::Stl,
+                        file,
+                    },
+                ))
+            })
+            .collect()
     }
 
     /// The files written early for write node `id`, if they hold the mesh `input` hashes to.
@@ -715,7 +714,7 @@ impl<'a> Builder<'a> {
             return Vec::new();
         };
         match ready.remove(&id) {
-            Some((hash, files)) if hash == input => files,
+            Some((hash, file)) if hash == input => vec![file],
             _ => Vec::new(),
         }
     }

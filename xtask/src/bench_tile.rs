@@ -113,14 +113,7 @@ fn stage_seconds(report: &serde_json::Value, prefix: &str) -> f64 {
 pub fn run(args: &[String]) -> Result<(), String> {
     let o = options(args)?;
     let root = super::root();
-    super::run(Command::new(env!("CARGO")).current_dir(&root).args([
-        "build",
-        "--release",
-        "--quiet",
-        "--bin",
-        "latticebuild",
-    ]))?;
-    let bin = root.join("target/release/latticebuild");
+    let bin = super::release_binary()?;
     let data = root.join("../shared/data/scaffolds");
     let dir = std::env::temp_dir().join(format!("latticebuild-bench-tile-{}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;

@@ -54,6 +54,18 @@ fn run(cmd: &mut Command) -> Result<(), String> {
     }
 }
 
+/// Builds the release binary and returns its path.
+fn release_binary() -> Result<PathBuf, String> {
+    run(Command::new(env!("CARGO")).current_dir(root()).args([
+        "build",
+        "--release",
+        "--quiet",
+        "--bin",
+        "latticebuild",
+    ]))?;
+    Ok(root().join("target/release/latticebuild"))
+}
+
 /// Runs the golden tests; with `--bless`, rewrites their expected files first.
 fn golden(bless: bool) -> Result<(), String> {
     let mut cmd = Command::new(env!("CARGO"));
@@ -198,14 +210,7 @@ fn bench(args: &[String]) -> Result<(), String> {
             other => return Err(format!("unknown bench argument `{other}`")),
         }
     }
-    run(Command::new(env!("CARGO")).current_dir(root()).args([
-        "build",
-        "--release",
-        "--quiet",
-        "--bin",
-        "latticebuild",
-    ]))?;
-    let bin = root().join("target/release/latticebuild");
+    let bin = release_binary()?;
     let peer_dir = root().join("../shared/bench/peers");
     let scratch = std::env::temp_dir().join(format!("latticebuild-bench-{}", std::process::id()));
     std::fs::create_dir_all(&scratch).map_err(|e| e.to_string())?;
