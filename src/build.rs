@@ -606,7 +606,6 @@ impl<'a> Builder<'a> {
                 Ok(writer)
             });
             let output = stage.run(cells, file, &*progress, &mut |chunk| {
-                let chunk = Arc::new(chunk);
                 for prewriter in &prewriters {
                     // A stopped prewriter only means its file is written again later.
                     let _ = prewriter.send.send(Arc::clone(&chunk));

@@ -7,10 +7,11 @@
 //! (Cache keys never involve times; this only decides whether a file must be written again.)
 
 use std::fs::{self, File};
-use std::io::{self, BufWriter, Seek, SeekFrom, Write};
+use std::io::{self, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use crate::direct_file::DirectFile;
 use crate::stages::{OutputSink, PendingFile, WrittenFile};
 
 /// Writes output files under one directory.
@@ -76,7 +77,7 @@ pub fn write_atomically(
     let result = (|| {
         let file = File::create(&temp)?;
         let mut writer = CountingWriter {
-            inner: BufWriter::with_capacity(1 << 20, file),
+            inner: DirectFile::new(file, &temp),
             bytes: 0,
         };
         fill(&mut writer)?;
@@ -108,7 +109,7 @@ impl OutputSink for OutputDir {
         let temp = temporary_beside(&path)?;
         let file = File::create(&temp)?;
         Ok(Box::new(PendingOutput {
-            writer: Some(BufWriter::with_capacity(1 << 20, file)),
+            writer: Some(DirectFile::new(file, &temp)),
             temp,
             path,
         }))
@@ -125,13 +126,13 @@ impl OutputSink for OutputDir {
 /// when dropped before (a failed or unused early write leaves nothing behind).
 struct PendingOutput {
     /// `None` once committed.
-    writer: Option<BufWriter<File>>,
+    writer: Option<DirectFile>,
     temp: PathBuf,
     path: PathBuf,
 }
 
 impl PendingOutput {
-    fn writer(&mut self) -> io::Result<&mut BufWriter<File>> {
+    fn writer(&mut self) -> io::Result<&mut DirectFile> {
         self.writer
             .as_mut()
             .ok_or_else(|| io::Error::other("the file was already committed"))
@@ -158,14 +159,14 @@ impl Seek for PendingOutput {
 
 impl PendingFile for PendingOutput {
     fn commit(mut self: Box<Self>) -> io::Result<(u64, u64)> {
-        let mut writer = self
+        let writer = self
             .writer
             .take()
             .ok_or_else(|| io::Error::other("the file was already committed"))?;
         let placed = (|| {
-            writer.flush()?;
-            let bytes = writer.get_ref().metadata()?.len();
-            drop(writer);
+            let file = writer.into_file()?;
+            let bytes = file.metadata()?.len();
+            drop(file);
             fs::rename(&self.temp, &self.path)?;
             Ok(bytes)
         })();

@@ -5,6 +5,7 @@ pub mod build;
 pub mod cache;
 pub mod cli;
 pub mod diagnostics;
+pub mod direct_file;
 pub mod files;
 pub mod graph;
 pub mod inspect;

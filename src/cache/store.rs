@@ -28,13 +28,14 @@
 use std::collections::HashSet;
 use std::fmt;
 use std::fs::{self, File};
-use std::io::{self, BufWriter, Read, Seek, SeekFrom, Write};
+use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use crate::cache::atomic::{TempFile, temp_owner_pid, write_atomically};
 use crate::cache::content_hash::ContentHash;
 use crate::cache::error::CacheError;
 use crate::cache::key::Key;
+use crate::direct_file::DirectFile;
 
 const MAGIC: [u8; 4] = *b"LBC1";
 /// Bump when the header layout changes; older entries then read as corrupt and are rebuilt.
@@ -197,7 +198,7 @@ impl LocalStore {
             fs::create_dir_all(dir).map_err(|e| CacheError::io("create directory", dir, e))?;
         }
         let (temp, file) = TempFile::beside(&destination)?;
-        let mut writer = BufWriter::with_capacity(WRITE_BUFFER, file);
+        let mut writer = DirectFile::new(file, temp.path());
         // Zeros until `commit` knows the length and hash: a crash before then leaves a temp
         // file (removed by `gc`), and even a renamed zero header reads as bad magic.
         writer
@@ -247,7 +248,7 @@ impl LocalStore {
 /// failed stage) removes the temporary file, so the entry stays whole or absent.
 pub struct PendingEntry {
     temp: TempFile,
-    writer: BufWriter<File>,
+    writer: DirectFile,
     hasher: blake3::Hasher,
     len: u64,
     destination: PathBuf,
@@ -262,7 +263,6 @@ impl Write for PendingEntry {
     }
 
     fn write_all(&mut self, buf: &[u8]) -> io::Result<()> {
-        // Large writes bypass the buffer and go straight from the caller's slice.
         self.writer.write_all(buf)?;
         self.hasher.update(buf);
         self.len += buf.len() as u64;
@@ -300,8 +300,8 @@ impl PendingEntry {
         header[4..8].copy_from_slice(&FORMAT_VERSION.to_le_bytes());
         header[8..16].copy_from_slice(&len.to_le_bytes());
         header[16..48].copy_from_slice(hash.as_bytes());
-        let fix_up = |writer: BufWriter<File>| -> io::Result<()> {
-            let mut file = writer.into_inner().map_err(|e| e.into_error())?;
+        let fix_up = |writer: DirectFile| -> io::Result<()> {
+            let mut file = writer.into_file()?;
             file.seek(SeekFrom::Start(0))?;
             file.write_all(&header)
         };

@@ -37,6 +37,7 @@ use latticebuild_geom::tile::{
     stream_scaffold, thickness_normal, tile_surface_scaffold,
 };
 use latticebuild_geom::validate::{self, StreamCheck};
+use std::sync::{Arc, mpsc};
 
 use super::artifact::{MeshArtifact, MeshSummary, Planar, TilingSummary};
 use super::chunked::ChunkedHead;
@@ -56,6 +57,28 @@ pub const VERSION: u32 = 3;
 /// bytes, so in its hash: the chunk size is a function of the resolution (in the key) alone,
 /// never of the machine.
 const CHUNK_TRIANGLES: usize = 2_000_000;
+
+/// Chunks queued for the mesh check besides the one it is checking.
+const CHECKS_IN_FLIGHT: usize = 1;
+
+/// Checks the chunks `receive` brings, on a thread of its own so the tiling of the next chunk
+/// goes on meanwhile. It gets a rayon pool of its own (one thread; the check's result does not
+/// depend on the thread count): the global pool's threads may all be blocked handing chunks
+/// to this thread, and a check waiting on them would never finish.
+fn check_chunks(receive: mpsc::Receiver<Arc<MeshChunk>>) -> Result<validate::MeshCheck, String> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .thread_name(|_| "mesh-check".into())
+        .build()
+        .map_err(|e| format!("cannot start the mesh check: {e}"))?;
+    Ok(pool.install(|| {
+        let mut check = StreamCheck::new();
+        for chunk in receive {
+            check.push(&chunk);
+        }
+        check.finish()
+    }))
+}
 
 /// What the stage made: a whole mesh (2D tilings), or the head of a mesh whose chunks went to
 /// the `chunks` callback of [`TileStage::run`].
@@ -253,7 +276,7 @@ impl TileStage {
         cells: &[&[u8]],
         file: Option<&[u8]>,
         progress: &dyn StageProgress,
-        chunks: &mut dyn FnMut(MeshChunk) -> Result<(), String>,
+        chunks: &mut dyn FnMut(Arc<MeshChunk>) -> Result<(), String>,
     ) -> Result<TileOutput, String> {
         progress.phase("reading the scaffold");
         let scaffold = self.scaffold(file)?;
@@ -294,21 +317,32 @@ impl TileStage {
                 .tile_surface(&scaffold, &solid, progress)
                 .map(TileOutput::Whole);
         }
-        let mut check = StreamCheck::new();
-        let stats = stream_scaffold(
-            &scaffold,
-            &solid,
-            self.skin,
-            self.resolution,
-            chunk_elements_for(self.resolution, CHUNK_TRIANGLES),
-            &mut |chunk| {
-                check.push(&chunk);
-                chunks(chunk)
-            },
-        )
-        .map_err(|e| format!("tiling {}: {e}", self.source()))?;
-        progress.phase("checking the mesh");
-        let check = check.finish();
+        let (stats, check) = std::thread::scope(|scope| {
+            let (send, receive) = mpsc::sync_channel::<Arc<MeshChunk>>(CHECKS_IN_FLIGHT);
+            let checker = scope.spawn(move || check_chunks(receive));
+            let stats = stream_scaffold(
+                &scaffold,
+                &solid,
+                self.skin,
+                self.resolution,
+                chunk_elements_for(self.resolution, CHUNK_TRIANGLES),
+                &mut |chunk| {
+                    let chunk = Arc::new(chunk);
+                    send.send(Arc::clone(&chunk))
+                        .map_err(|_| "the mesh check stopped".to_string())?;
+                    chunks(chunk)
+                },
+            );
+            drop(send);
+            progress.phase("checking the mesh");
+            let check = checker
+                .join()
+                .map_err(|_| "the mesh check panicked".to_string())?;
+            // A check that could not start explains the tiling's "check stopped".
+            let check = check?;
+            let stats = stats.map_err(|e| format!("tiling {}: {e}", self.source()))?;
+            Ok::<_, String>((stats, check))
+        })?;
         if check.triangles == 0 {
             return Err(format!(
                 "the tiled solid of `outputs.{}` is empty: the cell has no solid part at this \

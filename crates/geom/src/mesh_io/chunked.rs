@@ -345,6 +345,14 @@ impl<'a> Positions<'a> {
         if let Some(k) = id.checked_sub(self.first) {
             return self.own.get(k as usize).copied();
         }
+        self.borrowed_position(id)
+    }
+
+    /// Out of line, so that [`Positions::get`] is small enough to inline into the encoders:
+    /// most corners are own vertices.
+    #[cold]
+    #[inline(never)]
+    fn borrowed_position(&self, id: u32) -> Option<[f32; 3]> {
         let mask = self.slots.len() - 1;
         let mut h = self.slot(id);
         loop {

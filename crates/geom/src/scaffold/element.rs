@@ -312,6 +312,13 @@ impl ElementKind {
         }
     }
 
+    /// The tet4 shape functions (its barycentric coordinates) at `xi`: [`ElementKind::shape`]'s
+    /// values for `Tet4`, as a fixed-size array.
+    #[inline]
+    pub fn linear_tet_shape(xi: [f64; 3]) -> [f64; 4] {
+        tet_barycentric(xi).0
+    }
+
     /// Derivatives dN_i/dξ_a into `out[i][a]` (the unused reference coordinates get 0).
     pub fn shape_gradients(self, xi: [f64; 3], out: &mut [[f64; 3]]) {
         let mut values = [0.0; ElementKind::MAX_NODES];
