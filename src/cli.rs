@@ -215,9 +215,7 @@ fn run_cell(args: &CellArgs) -> Result<(), Failure> {
         .compile_cell(&manifest, &args.name)
         .map_err(|c| Failure::Usage(format!("error: {c}\n")))?;
     let cache = open_cache(&manifest.path, true)?;
-    let sink = OutputDir {
-        dir: manifest.out_dir.clone(),
-    };
+    let sink = OutputDir::new(manifest.out_dir.clone());
     let payload = Builder::new(&graph, &cache, &sink, &NoProgress)
         .build_node(node)
         .map_err(|e| Failure::Build(e.to_string()))?;
@@ -290,9 +288,7 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
         return Err(Failure::Usage(text));
     }
     let cache = open_cache(&manifest.path, args.quiet)?;
-    let sink = OutputDir {
-        dir: manifest.out_dir.clone(),
-    };
+    let sink = OutputDir::new(manifest.out_dir.clone());
     let bars;
     let progress: &dyn Progress = if !args.quiet && std::io::stderr().is_terminal() {
         bars = Bars::new();
@@ -350,9 +346,7 @@ fn run_graph(args: &ManifestArgs) -> Result<(), Failure> {
     let manifest = load_manifest(args)?;
     let graph = compile(&manifest)?;
     let cache = open_cache(&manifest.path, false)?;
-    let sink = OutputDir {
-        dir: manifest.out_dir.clone(),
-    };
+    let sink = OutputDir::new(manifest.out_dir.clone());
     for line in crate::graph::status::lines(&graph, &cache, &sink) {
         println!("{line}");
     }
