@@ -50,13 +50,15 @@ use crate::manifest::{
 };
 
 /// 3: quadratic elements interpolate nodal values through all their nodes; weights clamped
-/// after interpolation.
-pub const VERSION: u32 = 3;
+/// after interpolation. 4: chunks of about 500k triangles (were 2M).
+pub const VERSION: u32 = 4;
 
 /// Triangles per chunk asked of the producer, about. Chunk boundaries are in the payload's
 /// bytes, so in its hash: the chunk size is a function of the resolution (in the key) alone,
-/// never of the machine.
-const CHUNK_TRIANGLES: usize = 2_000_000;
+/// never of the machine. 500k rather than 2M: the chunks' working set then stays in cache
+/// (measured on the 100k bracket: 5 % less CPU end to end, peak memory 600 → 230 MB), and
+/// the pipeline fills and drains faster.
+const CHUNK_TRIANGLES: usize = 500_000;
 
 /// Chunks queued for the mesh check besides the one it is checking.
 const CHECKS_IN_FLIGHT: usize = 1;
