@@ -485,6 +485,9 @@ pub struct Welder<'a> {
     /// `None` when one chunk takes every element: nothing is ever open.
     last: Option<LastUsers>,
     frontier: HashMap<u128, OpenVertex, NameHasher>,
+    /// The frontier's `(id, last)`, by id: each chunk keeps the still-open ones and appends its
+    /// own (all with higher ids), so the chunk's `open` list needs no sort of the whole front.
+    open: Vec<(u32, u32)>,
     /// The element the next chunk starts at, and the id of its first vertex.
     next_element: usize,
     next_id: u64,
@@ -506,6 +509,7 @@ impl<'a> Welder<'a> {
             faces,
             last,
             frontier: HashMap::default(),
+            open: Vec::new(),
             next_element: 0,
             next_id: 0,
             uniform: None,
@@ -710,13 +714,20 @@ impl<'a> Welder<'a> {
         let mut open = Vec::new();
         if let Some(last) = &self.last {
             let face_masks = lattice.face_masks();
-            for (g, &(name, i, s)) in groups.iter().enumerate() {
-                let e = start + i as usize;
-                let corners = elements.element(e);
-                let v = &class(i as usize).shared[s as usize];
-                let mask = v.a.mask() | v.b.map_or(0, |b| b.mask());
-                let until = last.of(e, corners, mask, &self.faces, face_masks);
-                if until as usize >= end {
+            // The last element each new vertex reaches: a lookup per new vertex, in
+            // parallel; the few that stay open are then inserted in order.
+            let until: Vec<u32> = groups
+                .par_iter()
+                .map(|&(_, i, s)| {
+                    let e = start + i as usize;
+                    let v = &class(i as usize).shared[s as usize];
+                    let mask = v.a.mask() | v.b.map_or(0, |b| b.mask());
+                    last.of(e, elements.element(e), mask, &self.faces, face_masks)
+                })
+                .collect();
+            let mut fresh = Vec::new();
+            for (g, &(name, ..)) in groups.iter().enumerate() {
+                if until[g] as usize >= end {
                     let id = group_id[g].load(Ordering::Relaxed);
                     let position = vertices[(u64::from(id) - first) as usize];
                     self.frontier.insert(
@@ -724,14 +735,19 @@ impl<'a> Welder<'a> {
                         OpenVertex {
                             id,
                             position,
-                            last: until,
+                            last: until[g],
                         },
                     );
+                    fresh.push((id, until[g]));
                 }
             }
             self.frontier.retain(|_, v| v.last as usize >= end);
-            open = self.frontier.values().map(|v| v.id).collect();
-            open.sort_unstable();
+            // Earlier ids are all below this chunk's `first`, so appending the sorted new ones
+            // keeps the list sorted.
+            self.open.retain(|&(_, last)| last as usize >= end);
+            fresh.sort_unstable();
+            self.open.extend(fresh);
+            open = self.open.iter().map(|&(id, _)| id).collect();
         }
         self.next_element = end;
         self.next_id = base[n];
