@@ -64,6 +64,9 @@ enum Command {
     Sdf(SdfArgs),
     /// Reconstruct the periodic surface through a crystal's atoms (CIF or extended XYZ)
     Crystal(crystal_command::CrystalArgs),
+    /// Internal: frees files a build renamed away (temporary names only), after it returned
+    #[command(hide = true)]
+    FreeFiles { paths: Vec<std::path::PathBuf> },
 }
 
 #[derive(Args, Debug, Clone)]
@@ -176,6 +179,10 @@ pub fn main() -> ExitCode {
         },
         Command::Sdf(args) => sdf_command::run(&args.words),
         Command::Crystal(args) => crystal_command::run(&args),
+        Command::FreeFiles { paths } => {
+            crate::deferred_free::free_files(&paths);
+            ExitCode::SUCCESS
+        }
     }
 }
 
@@ -339,6 +346,11 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
                 .map_err(|e| Failure::Build(format!("cannot write `{file}`: {e}")))?;
         }
     }
+    // The outputs are in place and reported: what they replaced, and the cache entries gc
+    // collected, are freed by a detached helper, so the command need not wait for the disk.
+    let mut freed = sink.take_replaced();
+    freed.extend(cache.take_collected());
+    crate::deferred_free::free_detached(freed);
     Ok(())
 }
 

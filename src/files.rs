@@ -9,88 +9,45 @@
 use std::fs::{self, File};
 use std::io::{self, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, Mutex};
-use std::thread::JoinHandle;
 
+use crate::deferred_free::Deferred;
 use crate::direct_file::DirectFile;
 use crate::stages::{OutputSink, PendingFile, WrittenFile};
 
-/// Writes output files under one directory. Files they replace are removed on background
-/// threads, joined when the `OutputDir` is dropped (see [`replace`]).
+/// Writes output files under one directory. The big files they replace are freed later
+/// ([`crate::deferred_free`]): by the CLI after the command, or when the `OutputDir` drops.
 pub struct OutputDir {
     pub dir: PathBuf,
-    removals: Arc<Removals>,
+    replaced: Arc<Deferred>,
 }
 
 impl OutputDir {
     pub fn new(dir: PathBuf) -> OutputDir {
         OutputDir {
             dir,
-            removals: Arc::default(),
-        }
-    }
-}
-
-impl Drop for OutputDir {
-    fn drop(&mut self) {
-        self.removals.join();
-    }
-}
-
-/// Threads removing replaced files.
-#[derive(Default)]
-struct Removals(Mutex<Vec<JoinHandle<()>>>);
-
-impl Removals {
-    /// Removes `path` on a thread of its own (here, if none can start).
-    fn remove(&self, path: PathBuf) {
-        let thread = std::thread::Builder::new()
-            .name("remove-old-file".into())
-            .spawn({
-                let path = path.clone();
-                move || {
-                    let _ = fs::remove_file(path);
-                }
-            });
-        match (thread, self.0.lock()) {
-            (Ok(thread), Ok(mut threads)) => {
-                // A long-lived sink (watch) keeps only the threads still running.
-                threads.retain(|t| !t.is_finished());
-                threads.push(thread);
-            }
-            (Ok(thread), Err(_)) => {
-                let _ = thread.join();
-            }
-            (Err(_), _) => {
-                let _ = fs::remove_file(path);
-            }
+            replaced: Arc::default(),
         }
     }
 
-    fn join(&self) {
-        let threads = match self.0.lock() {
-            Ok(mut threads) => std::mem::take(&mut *threads),
-            Err(_) => return,
-        };
-        for thread in threads {
-            let _ = thread.join();
-        }
+    /// The replaced files still to be freed (under temporary names), now the caller's.
+    pub fn take_replaced(&self) -> Vec<PathBuf> {
+        self.replaced.take()
     }
 }
 
-/// Renames `temp` over `path`. A file already at `path` is first given a second, hidden name,
-/// so the rename only drops a name, and its data is freed by `removals` in the background:
-/// deleting gigabytes waits for the disk (0.4 s for a 2.2 GB STL on a `discard` mount), and
-/// nothing the build still does needs to wait for it.
-fn replace(temp: &Path, path: &Path, removals: &Removals) -> io::Result<()> {
+/// Renames `temp` over `path`. A file already at `path` is first given a second, temporary
+/// name, so the rename only drops a name, and its data is freed through `replaced`: deleting
+/// gigabytes waits for the disk (0.4 s for a 2.2 GB STL on a `discard` mount).
+fn replace(temp: &Path, path: &Path, replaced: &Deferred) -> io::Result<()> {
     let old = temporary_beside(path)?;
     // Fails when there is no old file (or no hard links here): then there is nothing to free.
     let kept = fs::hard_link(path, &old).is_ok();
     let renamed = fs::rename(temp, path);
     if kept {
         // Even when the rename failed: the link was only a second name of the old file.
-        removals.remove(old);
+        replaced.free(old);
     }
     renamed
 }
@@ -152,11 +109,11 @@ pub fn write_atomically(
     write_replacing(path, fill, None)
 }
 
-/// [`write_atomically`], the old file freed by `removals` when given.
+/// [`write_atomically`], the old file freed through `replaced` when given.
 fn write_replacing(
     path: &Path,
     fill: &mut dyn FnMut(&mut dyn Write) -> io::Result<()>,
-    removals: Option<&Removals>,
+    replaced: Option<&Deferred>,
 ) -> io::Result<u64> {
     let temp = temporary_beside(path)?;
     let result = (|| {
@@ -169,8 +126,8 @@ fn write_replacing(
         writer.flush()?;
         let bytes = writer.bytes;
         drop(writer);
-        match removals {
-            Some(removals) => replace(&temp, path, removals)?,
+        match replaced {
+            Some(replaced) => replace(&temp, path, replaced)?,
             None => fs::rename(&temp, path)?,
         }
         Ok(bytes)
@@ -188,7 +145,7 @@ impl OutputSink for OutputDir {
         fill: &mut dyn FnMut(&mut dyn Write) -> io::Result<()>,
     ) -> io::Result<(u64, u64)> {
         let path = self.dir.join(relative);
-        let bytes = write_replacing(&path, fill, Some(&self.removals))?;
+        let bytes = write_replacing(&path, fill, Some(&self.replaced))?;
         Ok((bytes, modified_ns(&path).unwrap_or(0)))
     }
 
@@ -200,7 +157,7 @@ impl OutputSink for OutputDir {
             writer: Some(DirectFile::new(file, &temp)),
             temp,
             path,
-            removals: Arc::clone(&self.removals),
+            replaced: Arc::clone(&self.replaced),
         }))
     }
 
@@ -218,7 +175,7 @@ struct PendingOutput {
     writer: Option<DirectFile>,
     temp: PathBuf,
     path: PathBuf,
-    removals: Arc<Removals>,
+    replaced: Arc<Deferred>,
 }
 
 impl PendingOutput {
@@ -257,7 +214,7 @@ impl PendingFile for PendingOutput {
             let file = writer.into_file()?;
             let bytes = file.metadata()?.len();
             drop(file);
-            replace(&self.temp, &self.path, &self.removals)?;
+            replace(&self.temp, &self.path, &self.replaced)?;
             Ok(bytes)
         })();
         match placed {
@@ -292,7 +249,7 @@ mod tests {
     }
 
     #[test]
-    fn a_replaced_file_is_gone_once_the_sink_is_dropped_and_no_second_name_is_left() {
+    fn a_replaced_file_is_freed_once_the_sink_is_dropped_and_no_second_name_is_left() {
         let dir = tempfile::tempdir().expect("temp dir");
         let sink = OutputDir::new(dir.path().to_path_buf());
         let old = vec![7u8; 3 * crate::direct_file::BLOCK];

@@ -4,6 +4,7 @@
 pub mod build;
 pub mod cache;
 pub mod cli;
+pub mod deferred_free;
 pub mod diagnostics;
 pub mod direct_file;
 pub mod files;

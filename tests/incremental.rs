@@ -218,3 +218,20 @@ fn concurrent_builds_on_one_cache_both_succeed_with_identical_files() {
     fresh.build(&[]);
     assert_eq!(outputs(&fresh), first);
 }
+
+#[test]
+fn the_hidden_free_files_helper_removes_only_temporary_names() {
+    // What a build hands to its detached helper: big files it renamed out of the way.
+    let p = Project::new(MANIFEST);
+    let names = ["part.stl", ".part.stl.tmp-1-2", ".tmp-1-2-00ff"];
+    for name in names {
+        std::fs::write(p.path().join(name), b"old").expect("write");
+    }
+    let out = p.run(&["free-files", "--", names[0], names[1], names[2]]);
+    assert!(out.status.success());
+    assert!(
+        p.path().join(names[0]).exists(),
+        "a user's name is never freed"
+    );
+    assert!(!p.path().join(names[1]).exists() && !p.path().join(names[2]).exists());
+}
