@@ -19,7 +19,8 @@
 //! - Streaming ends at the first seek to anywhere but the current position, at `flush`, or at
 //!   [`DirectFile::into_file`]: every block is then written, the tail goes through the ordinary
 //!   descriptor, and later writes go straight to it.
-//! - An error of the writer thread is returned by the next write, seek or flush, never lost.
+//! - An error of the writer thread is returned by the next write, seek or flush, never lost;
+//!   after a block failed to go out, every later call fails (the file would have a gap).
 //!   Where the file system refuses `O_DIRECT` (at open or at the first write), the blocks are
 //!   written through the ordinary descriptor instead, still off the producing thread.
 
@@ -49,6 +50,8 @@ pub struct DirectFile {
     handed: u64,
     /// Where the direct descriptor is opened from.
     path: PathBuf,
+    /// Set when a block could not be handed off: the file has a gap, so every later call fails.
+    broken: bool,
 }
 
 impl DirectFile {
@@ -61,6 +64,7 @@ impl DirectFile {
             writer: None,
             handed: 0,
             path: path.to_path_buf(),
+            broken: false,
         }
     }
 
@@ -68,6 +72,13 @@ impl DirectFile {
     pub fn into_file(mut self) -> io::Result<File> {
         self.end_streaming()?;
         self.file.try_clone()
+    }
+
+    fn check(&self) -> io::Result<()> {
+        match self.broken {
+            true => Err(io::Error::other("an earlier write to this file failed")),
+            false => Ok(()),
+        }
     }
 
     /// Whether blocks are still being streamed.
@@ -81,6 +92,12 @@ impl DirectFile {
 
     /// Hands the full block to the writer thread and takes an empty one.
     fn hand_off(&mut self) -> io::Result<()> {
+        let handed = self.try_hand_off();
+        self.broken |= handed.is_err();
+        handed
+    }
+
+    fn try_hand_off(&mut self) -> io::Result<()> {
         if self.writer.is_none() {
             self.writer = Some(BlockWriter::start(&self.file, &self.path)?);
         }
@@ -99,6 +116,7 @@ impl DirectFile {
     /// Writes every block, then the tail through the ordinary descriptor, and leaves that
     /// descriptor at the end of the file.
     fn end_streaming(&mut self) -> io::Result<()> {
+        self.check()?;
         let Some(tail) = self.block.take() else {
             return Ok(());
         };
@@ -114,6 +132,7 @@ impl DirectFile {
 
 impl Write for DirectFile {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        self.check()?;
         let Some(block) = self.block.as_mut() else {
             return self.file.write(buf);
         };
@@ -126,8 +145,10 @@ impl Write for DirectFile {
 
     fn write_all(&mut self, mut buf: &[u8]) -> io::Result<()> {
         while !buf.is_empty() {
-            let n = self.write(buf)?;
-            buf = &buf[n..];
+            match self.write(buf)? {
+                0 => return Err(io::ErrorKind::WriteZero.into()),
+                n => buf = &buf[n..],
+            }
         }
         Ok(())
     }
@@ -141,6 +162,7 @@ impl Write for DirectFile {
 
 impl Seek for DirectFile {
     fn seek(&mut self, to: SeekFrom) -> io::Result<u64> {
+        self.check()?;
         if self.streaming() {
             let here = self.position();
             if matches!(to, SeekFrom::Current(0)) || to == SeekFrom::Start(here) {
