@@ -35,6 +35,7 @@
 //! resolution.
 
 mod cube;
+mod face_plan;
 mod lattice;
 mod local;
 mod planar;

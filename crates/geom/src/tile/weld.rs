@@ -1,5 +1,8 @@
 //! Welding the elements' local meshes into one mesh, by the intrinsic names of boundary
-//! vertices (module docs of [`super`], step 3).
+//! vertices (module docs of [`super`], step 3). For a uniform cell, vertices inside a face
+//! are paired by structure instead ([`super::face_plan`]): the same pairs the names would
+//! make, without hashing and sorting the bulk of the shared vertices; those on element edges
+//! and nodes (shared by any number of elements) keep their names.
 //!
 //! Invariants: a boundary vertex's name depends only on global node ids and lattice weights,
 //! never on the element's frame; the lowest element using a vertex places and numbers it;
@@ -10,8 +13,8 @@
 
 use rayon::prelude::*;
 use std::collections::HashMap;
-use std::sync::atomic::{AtomicU32, Ordering};
 
+use super::face_plan::{FacePlan, NO_FACE};
 use super::lattice::{Lattice, Weights};
 use super::local::{LocalMesh, LocalVertex, POINT};
 use super::{Elements, TileError, TileStats};
@@ -54,6 +57,8 @@ struct FaceTable {
     boundary: Vec<u8>,
     /// Per `(element, face)`: the other element sharing the face, or [`NONE`].
     neighbour: Vec<u32>,
+    /// Per `(element, face)` with a neighbour: the face's index in the neighbour.
+    neighbour_face: Vec<u8>,
     stats: TileStats,
 }
 
@@ -80,6 +85,7 @@ impl FaceTable {
         let mut table = FaceTable {
             boundary: vec![0u8; n],
             neighbour: vec![NONE; n * per],
+            neighbour_face: vec![0; n * per],
             stats: TileStats {
                 elements: n,
                 ..TileStats::default()
@@ -101,6 +107,8 @@ impl FaceTable {
                     let (a, b) = (faces[i].1 as usize, faces[i + 1].1 as usize);
                     table.neighbour[a] = (b / per) as u32;
                     table.neighbour[b] = (a / per) as u32;
+                    table.neighbour_face[a] = (b % per) as u8;
+                    table.neighbour_face[b] = (a % per) as u8;
                     table.stats.interior_faces += 1;
                 }
                 count => {
@@ -450,6 +458,8 @@ enum Role {
     Borrower,
     /// An element of an earlier chunk owns it (its id is known).
     Earlier,
+    /// Not yet known: to be welded by name.
+    Named,
 }
 
 /// The classified local meshes of a chunk's elements: one for all, or one each.
@@ -475,23 +485,62 @@ struct OpenVertex {
     last: u32,
 }
 
+/// What one element welded by structure, besides its slots' roles.
+#[derive(Default)]
+struct FaceWelds {
+    /// The earlier chunks' vertices it borrows.
+    borrowed: Vec<(u32, [f32; 3])>,
+    /// Its owned slots that an element of a later chunk borrows, with that element.
+    opens: Vec<(u32, u32)>,
+    /// How many of its slots it borrows.
+    paired: u64,
+}
+
+/// Most faces an element has (the cube's six).
+const MAX_FACES: usize = 6;
+
+/// How an element meets the scaffold through one of its faces, for the vertices inside it.
+#[derive(Clone, Copy)]
+enum FaceView {
+    /// Weld by name (no plan, no neighbour, or lists that do not pair).
+    Named,
+    /// A boundary face: only this element uses its vertices.
+    Alone,
+    /// Paired slot by slot with `neighbour`, which sees the face as its face `face`; `code`
+    /// and `other` are the two sides' rank codes ([`FacePlan::code`]).
+    Paired {
+        neighbour: u32,
+        face: u8,
+        code: u8,
+        other: u8,
+    },
+}
+
 /// Welds elements chunk by chunk, in element order, into the [`MeshChunk`]s of one mesh (see
 /// the module docs). Between chunks it holds only per-element face data and the vertices open
-/// across the chunk boundary (`frontier`), so memory follows the chunk, not the scaffold's size.
+/// across the chunk boundary (`frontier`, `face_frontier`), so memory follows the chunk, not
+/// the scaffold's size.
 pub struct Welder<'a> {
     elements: &'a dyn Corners,
     lattice: &'a dyn Lattice,
     faces: FaceTable,
     /// `None` when one chunk takes every element: nothing is ever open.
     last: Option<LastUsers>,
+    /// Open vertices welded by name, by name.
     frontier: HashMap<u128, OpenVertex, NameHasher>,
+    /// Open vertices welded by structure, by `owner element << 32 | owner slot`.
+    face_frontier: HashMap<u64, OpenVertex, NameHasher>,
     /// The frontier's `(id, last)`, by id: each chunk keeps the still-open ones and appends its
     /// own (all with higher ids), so the chunk's `open` list needs no sort of the whole front.
     open: Vec<(u32, u32)>,
     /// The element the next chunk starts at, and the id of its first vertex.
     next_element: usize,
     next_id: u64,
-    uniform: Option<Classified>,
+    /// A uniform cell's classified local mesh and its structural weld plan.
+    uniform: Option<(Classified, Option<FacePlan>)>,
+    /// Slots that took another element's vertex, welded by structure and by name.
+    #[cfg_attr(not(test), allow(dead_code))]
+    borrowed_by: [u64; 2],
 }
 
 impl<'a> Welder<'a> {
@@ -509,15 +558,47 @@ impl<'a> Welder<'a> {
             faces,
             last,
             frontier: HashMap::default(),
+            face_frontier: HashMap::default(),
             open: Vec::new(),
             next_element: 0,
             next_id: 0,
             uniform: None,
+            borrowed_by: [0; 2],
         })
     }
 
     pub fn stats(&self) -> TileStats {
         self.faces.stats.clone()
+    }
+
+    /// How element `e` (corner nodes `corners`, boundary bits `boundary`) meets the scaffold
+    /// through each face, under `plan`.
+    fn face_views(&self, plan: &FacePlan, e: usize, boundary: u8) -> [FaceView; MAX_FACES] {
+        let per = self.lattice.face_masks().len();
+        let corners = self.elements.element(e);
+        let mut views = [FaceView::Named; MAX_FACES];
+        for (f, view) in views.iter_mut().enumerate().take(per) {
+            let neighbour = self.faces.neighbour[e * per + f];
+            *view = if boundary & 1 << f != 0 {
+                FaceView::Alone
+            } else if neighbour == NONE {
+                FaceView::Named
+            } else {
+                let g = self.faces.neighbour_face[e * per + f];
+                let code = plan.code(f, corners);
+                let other = plan.code(g as usize, self.elements.element(neighbour as usize));
+                match plan.pairs(f, code, g as usize, other) {
+                    true => FaceView::Paired {
+                        neighbour,
+                        face: g,
+                        code: code as u8,
+                        other: other as u8,
+                    },
+                    false => FaceView::Named,
+                }
+            };
+        }
+        views
     }
 
     /// Welds the next `count` elements (from where the previous chunk ended), whose local
@@ -530,15 +611,27 @@ impl<'a> Welder<'a> {
         if let Locals::Uniform(local) = &locals
             && self.uniform.is_none()
         {
-            self.uniform = Some(Classified::new(lattice, local));
+            let classified = Classified::new(lattice, local);
+            let plan = (lattice.face_masks().len() <= MAX_FACES).then(|| {
+                let ends: Vec<_> = classified.shared.iter().map(|v| (v.a, v.b)).collect();
+                let surface: Vec<bool> = classified.shared.iter().map(|v| v.caps == 0).collect();
+                FacePlan::new(&ends, &surface, lattice.face_masks())
+            });
+            self.uniform = Some((classified, plan));
         }
-        let classes = match &locals {
-            Locals::Uniform(_) => Classes::Uniform(self.uniform.as_ref().expect("classified")),
-            Locals::PerElement(all) => Classes::Each(
-                all[..n]
-                    .par_iter()
-                    .map(|l| Classified::new(lattice, l))
-                    .collect(),
+        let (classes, plan) = match &locals {
+            Locals::Uniform(_) => {
+                let (classified, plan) = self.uniform.as_ref().expect("classified");
+                (Classes::Uniform(classified), plan.as_ref())
+            }
+            Locals::PerElement(all) => (
+                Classes::Each(
+                    all[..n]
+                        .par_iter()
+                        .map(|l| Classified::new(lattice, l))
+                        .collect(),
+                ),
+                None,
             ),
         };
         let class = |i: usize| classes.get(i);
@@ -550,25 +643,96 @@ impl<'a> Welder<'a> {
         for i in 0..n {
             slot_base.push(slot_base[i] + class(i).shared.len());
         }
+        let slots = slot_base[n];
+        let slot_lengths = || (0..n).map(|i| class(i).shared.len());
 
-        // Name every shared vertex every element uses; equal names are one vertex, owned by the
-        // lowest element — of an earlier chunk when the frontier has it.
+        // Per slot: its role, and the owner's slot (Borrower) or the vertex id (Earlier).
+        // Vertices inside a face the plan pairs are welded by structure here, element by
+        // element; the rest are left Named for the name weld below.
+        let mut role = vec![Role::Named; slots];
+        let mut link = vec![0u32; slots];
+        let face_frontier = &self.face_frontier;
+        let this = &*self;
+        let per_element: Vec<_> = split_by(&mut role, slot_lengths())
+            .into_iter()
+            .zip(split_by(&mut link, slot_lengths()))
+            .collect();
+        let structural: Vec<FaceWelds> = per_element
+            .into_par_iter()
+            .enumerate()
+            .map(|(i, (roles, links))| {
+                let e = start + i;
+                let mut welds = FaceWelds::default();
+                let views = plan.map(|plan| (plan, this.face_views(plan, e, boundary[i])));
+                for (s, v) in class(i).shared.iter().enumerate() {
+                    if !used(i, v) {
+                        roles[s] = Role::Unused;
+                        continue;
+                    }
+                    let Some((plan, views)) = &views else {
+                        continue;
+                    };
+                    let f = plan.face_of(s);
+                    if f == NO_FACE {
+                        continue;
+                    }
+                    match views[f as usize] {
+                        FaceView::Named => {}
+                        FaceView::Alone => roles[s] = Role::Owner,
+                        FaceView::Paired { neighbour, .. } if neighbour as usize > e => {
+                            roles[s] = Role::Owner;
+                            if neighbour as usize >= end {
+                                welds.opens.push((s as u32, neighbour));
+                            }
+                        }
+                        FaceView::Paired {
+                            neighbour,
+                            face,
+                            code,
+                            other,
+                        } => {
+                            let (code, other) = (code as usize, other as usize);
+                            let theirs = plan.partner(s, f as usize, code, face as usize, other);
+                            let owner = neighbour as usize;
+                            welds.paired += 1;
+                            if owner >= start {
+                                roles[s] = Role::Borrower;
+                                links[s] = (slot_base[owner - start] + theirs as usize) as u32;
+                            } else if let Some(o) = face_frontier.get(&face_key(owner, theirs)) {
+                                roles[s] = Role::Earlier;
+                                links[s] = o.id;
+                                welds.borrowed.push((o.id, o.position));
+                            } else {
+                                // Not reachable: the owner left it open for this element.
+                                debug_assert!(false, "face vertex of {owner} not open");
+                                roles[s] = Role::Owner;
+                            }
+                        }
+                    }
+                }
+                welds
+            })
+            .collect();
+
+        // Name every other shared vertex every element uses; equal names are one vertex,
+        // owned by the lowest element — of an earlier chunk when the frontier has it.
+        let role_of = &role;
         let mut names: Vec<(u128, u32, u32)> = (0..n)
             .into_par_iter()
             .flat_map_iter(|i| {
                 let corners = elements.element(start + i);
+                let roles = &role_of[slot_base[i]..slot_base[i + 1]];
                 class(i)
                     .shared
                     .iter()
                     .enumerate()
-                    .filter(move |(_, v)| used(i, v))
+                    .filter(move |&(s, _)| roles[s] == Role::Named)
                     .map(move |(s, v)| (vertex_name(corners, v), i as u32, s as u32))
             })
             .collect();
         sort_names(&mut names);
-        let slots = slot_base[n];
         // Runs of equal names, and whether an earlier chunk has each: found in parallel, as
-        // these are millions of lookups a chunk.
+        // these can be millions of lookups a chunk.
         let starts: Vec<usize> = (0..names.len())
             .into_par_iter()
             .filter(|&r| r == 0 || names[r].0 != names[r - 1].0)
@@ -581,32 +745,30 @@ impl<'a> Welder<'a> {
                 false => frontier.get(&names[r].0).map(|o| (o.id, o.position)),
             })
             .collect();
-        // Per new group: its name and owner slot, for the frontier; per run: its new group.
+        // The new groups (name and owner), for the frontier; every run's slots get their role.
         let mut groups: Vec<(u128, u32, u32)> = Vec::new();
         let mut borrowed: Vec<(u32, [f32; 3])> = Vec::new();
-        let mut run_group = vec![NONE; starts.len()];
         for (k, &r) in starts.iter().enumerate() {
+            let run_end = starts.get(k + 1).copied().unwrap_or(names.len());
+            let (_, i0, s0) = names[r];
+            let owner_slot = (slot_base[i0 as usize] + s0 as usize) as u32;
             match earlier[k] {
                 Some(vertex) => borrowed.push(vertex),
-                None => {
-                    run_group[k] = groups.len() as u32;
-                    groups.push(names[r]);
-                }
+                None => groups.push(names[r]),
             }
-        }
-        // Per slot: the chunk-local group (Owner, Borrower) or the vertex id (Earlier).
-        let mut group = vec![0u32; slots];
-        let mut role = vec![Role::Unused; slots];
-        for (k, &r) in starts.iter().enumerate() {
-            let end = starts.get(k + 1).copied().unwrap_or(names.len());
-            for (at, &(_, i, s)) in names[r..end].iter().enumerate() {
+            for (at, &(_, i, s)) in names[r..run_end].iter().enumerate() {
                 let slot = slot_base[i as usize] + s as usize;
-                (role[slot], group[slot]) = match earlier[k] {
+                (role[slot], link[slot]) = match earlier[k] {
                     Some((id, _)) => (Role::Earlier, id),
-                    None if at == 0 => (Role::Owner, run_group[k]),
-                    None => (Role::Borrower, run_group[k]),
+                    None if at == 0 => (Role::Owner, 0),
+                    None => (Role::Borrower, owner_slot),
                 };
             }
+        }
+        self.borrowed_by[1] += (names.len() - groups.len()) as u64;
+        for welds in &structural {
+            borrowed.extend_from_slice(&welds.borrowed);
+            self.borrowed_by[0] += welds.paired;
         }
         drop(names);
         borrowed.sort_unstable_by_key(|&(id, _)| id);
@@ -631,26 +793,29 @@ impl<'a> Welder<'a> {
         if base[n] > u64::from(u32::MAX) {
             return Err(TileError::TooManyVertices(base[n]));
         }
-        let group_id: Vec<AtomicU32> = (0..groups.len()).map(|_| AtomicU32::new(0)).collect();
+        // Per slot: the id its owner gave it (owner slots only).
+        let mut slot_id = vec![0u32; slots];
         // Written in place, element by element in parallel: each element's vertices and
         // triangles have a known range of the chunk.
         let mut vertices = vec![[0.0f32; 3]; (base[n] - first) as usize];
         let vertex_ranges = split_by(&mut vertices, owned.iter().copied());
+        let id_ranges = split_by(&mut slot_id, slot_lengths());
+        let role = &role;
         vertex_ranges
             .into_par_iter()
+            .zip(id_ranges)
             .enumerate()
-            .for_each(|(i, out)| {
+            .for_each(|(i, (out, ids))| {
                 let c = class(i);
                 let mut next = base[i] as u32;
                 let mut out = out.iter_mut();
                 for (v, xi) in c.xi.iter().enumerate() {
                     let s = c.shared_index[v];
                     if s != NONE {
-                        let slot = slot_base[i] + s as usize;
-                        if role[slot] != Role::Owner {
+                        if role[slot_base[i] + s as usize] != Role::Owner {
                             continue;
                         }
-                        group_id[group[slot] as usize].store(next, Ordering::Relaxed);
+                        ids[s as usize] = next;
                     }
                     next += 1;
                     if let Some(v) = out.next() {
@@ -673,31 +838,28 @@ impl<'a> Welder<'a> {
             .collect();
         let mut triangles = vec![[0u32; 3]; triangle_counts.iter().sum()];
         let triangle_ranges = split_by(&mut triangles, triangle_counts.iter().copied());
-        triangle_ranges
-            .into_par_iter()
-            .enumerate()
-            .for_each(|(i, out)| {
+        let (link, slot_id) = (&link, &slot_id);
+        triangle_ranges.into_par_iter().enumerate().for_each_init(
+            Vec::new,
+            |ids: &mut Vec<u32>, (i, out)| {
                 let (local, c) = (locals.get(i), class(i));
                 let mut next = base[i] as u32;
-                let ids: Vec<u32> = (0..local.vertices.len())
-                    .map(|v| {
-                        let s = c.shared_index[v];
-                        if s != NONE {
-                            let slot = slot_base[i] + s as usize;
-                            match role[slot] {
-                                Role::Owner => {}
-                                // Only dropped caps use it: never referenced.
-                                Role::Unused => return u32::MAX,
-                                Role::Borrower => {
-                                    return group_id[group[slot] as usize].load(Ordering::Relaxed);
-                                }
-                                Role::Earlier => return group[slot],
-                            }
+                ids.clear();
+                ids.extend((0..local.vertices.len()).map(|v| {
+                    let s = c.shared_index[v];
+                    if s != NONE {
+                        let slot = slot_base[i] + s as usize;
+                        match role[slot] {
+                            Role::Owner => {}
+                            // Only dropped caps use it: never referenced.
+                            Role::Unused | Role::Named => return u32::MAX,
+                            Role::Borrower => return slot_id[link[slot] as usize],
+                            Role::Earlier => return link[slot],
                         }
-                        next += 1;
-                        next - 1
-                    })
-                    .collect();
+                    }
+                    next += 1;
+                    next - 1
+                }));
                 let caps = local
                     .caps
                     .iter()
@@ -707,14 +869,15 @@ impl<'a> Welder<'a> {
                 for (slot, t) in out.iter_mut().zip(local.triangles.iter().chain(caps)) {
                     *slot = t.map(|v| ids[v as usize]);
                 }
-            });
+            },
+        );
 
         // What later chunks may still use: this chunk's new shared vertices whose node, edge or
         // face reaches past it, and the earlier open ones that still do.
         let mut open = Vec::new();
         if let Some(last) = &self.last {
             let face_masks = lattice.face_masks();
-            // The last element each new vertex reaches: a lookup per new vertex, in
+            // The last element each new named vertex reaches: a lookup per vertex, in
             // parallel; the few that stay open are then inserted in order.
             let until: Vec<u32> = groups
                 .par_iter()
@@ -725,23 +888,30 @@ impl<'a> Welder<'a> {
                     last.of(e, elements.element(e), mask, &self.faces, face_masks)
                 })
                 .collect();
+            let owner_id = |i: usize, s: u32| slot_id[slot_base[i] + s as usize];
+            let open_vertex = |id: u32, last: u32| OpenVertex {
+                id,
+                position: vertices[(u64::from(id) - first) as usize],
+                last,
+            };
             let mut fresh = Vec::new();
-            for (g, &(name, ..)) in groups.iter().enumerate() {
+            for (g, &(name, i, s)) in groups.iter().enumerate() {
                 if until[g] as usize >= end {
-                    let id = group_id[g].load(Ordering::Relaxed);
-                    let position = vertices[(u64::from(id) - first) as usize];
-                    self.frontier.insert(
-                        name,
-                        OpenVertex {
-                            id,
-                            position,
-                            last: until[g],
-                        },
-                    );
+                    let id = owner_id(i as usize, s);
+                    self.frontier.insert(name, open_vertex(id, until[g]));
                     fresh.push((id, until[g]));
                 }
             }
+            for (i, welds) in structural.iter().enumerate() {
+                for &(s, last) in &welds.opens {
+                    let id = owner_id(i, s);
+                    self.face_frontier
+                        .insert(face_key(start + i, s), open_vertex(id, last));
+                    fresh.push((id, last));
+                }
+            }
             self.frontier.retain(|_, v| v.last as usize >= end);
+            self.face_frontier.retain(|_, v| v.last as usize >= end);
             // Earlier ids are all below this chunk's `first`, so appending the sorted new ones
             // keeps the list sorted.
             self.open.retain(|&(_, last)| last as usize >= end);
@@ -759,6 +929,11 @@ impl<'a> Welder<'a> {
             open,
         })
     }
+}
+
+/// The face frontier's key of slot `slot` of element `e`.
+fn face_key(e: usize, slot: u32) -> u64 {
+    (e as u64) << 32 | u64::from(slot)
 }
 
 /// Hashes a vertex name (already a 128-bit hash) by folding it to 64 bits.
@@ -782,6 +957,9 @@ impl std::hash::Hasher for FoldHasher {
         for &b in bytes {
             self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0100_0000_01B3);
         }
+    }
+    fn write_u64(&mut self, key: u64) {
+        self.0 = fmix64(key);
     }
     fn write_u128(&mut self, name: u128) {
         self.0 ^= (name as u64) ^ (name >> 64) as u64;
@@ -823,6 +1001,136 @@ mod tests {
                 (name, fmix64(i) as u32, i as u32)
             })
             .collect()
+    }
+
+    /// Corners of a scaffold's elements, placed at a point only the element and `xi` fix.
+    struct Plain {
+        corners: Vec<u32>,
+        per: usize,
+    }
+
+    impl Corners for Plain {
+        fn count(&self) -> usize {
+            self.corners.len() / self.per
+        }
+        fn element(&self, e: usize) -> &[u32] {
+            &self.corners[e * self.per..(e + 1) * self.per]
+        }
+        fn place(&self, e: usize, xi: [f64; 3]) -> [f64; 3] {
+            [xi[0] + e as f64, xi[1] - 0.5 * e as f64, xi[2]]
+        }
+    }
+
+    /// Schwarz P less an offset, in whatever reference coordinates the lattice has.
+    struct SchwarzP(f64);
+
+    impl crate::field::ScalarField for SchwarzP {
+        fn eval_points(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
+            let tau = std::f64::consts::TAU;
+            for i in 0..out.len() {
+                out[i] = (tau * xs[i]).cos() + (tau * ys[i]).cos() + (tau * zs[i]).cos() - self.0;
+            }
+        }
+    }
+
+    /// The chunks of a uniform cell welded with the structural plan, and by name only (the
+    /// same local mesh given per element), with the counts of slots borrowed each way.
+    fn weld_both_ways(
+        elements: &dyn Corners,
+        lattice: &dyn Lattice,
+        local: &LocalMesh,
+        per_chunk: usize,
+    ) -> ([Vec<MeshChunk>; 2], [u64; 2]) {
+        let count = elements.count();
+        let chunks = count.div_ceil(per_chunk);
+        let all = vec![local.clone(); count];
+        let run = |uniform: bool| {
+            let mut welder = Welder::new(elements, lattice, chunks > 1).expect("conforming");
+            let out: Vec<MeshChunk> = (0..chunks)
+                .map(|k| {
+                    let locals = match uniform {
+                        true => Locals::Uniform(local),
+                        false => Locals::PerElement(&all[k * per_chunk..]),
+                    };
+                    welder.chunk(per_chunk, locals).expect("weld")
+                })
+                .collect();
+            (out, welder.borrowed_by)
+        };
+        let (structural, by) = run(true);
+        let (named, by_name) = run(false);
+        assert_eq!(by_name[0], 0, "per-element cells are welded by name");
+        assert_eq!(
+            by[0] + by[1],
+            by_name[1],
+            "the same slots borrow either way"
+        );
+        ([structural, named], by)
+    }
+
+    /// The structural weld gives the name weld's mesh bit for bit, on every kind of real
+    /// scaffold, whole or in chunks, and welds most shared vertices itself.
+    #[test]
+    fn structural_weld_equals_the_name_weld_on_every_scaffold() {
+        use crate::scaffold::{ElementKind, read_scaffold};
+        let dir = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../../shared/data/scaffolds"
+        );
+        let mut kinds = std::collections::BTreeSet::new();
+        let mut files: Vec<_> = std::fs::read_dir(dir)
+            .expect("shared scaffolds")
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|x| x == "msh"))
+            .collect();
+        files.sort();
+        for path in files {
+            let name = path.display().to_string();
+            let bytes = std::fs::read(&path).expect("read");
+            let Ok(scaffold) = read_scaffold(&bytes, &name, None) else {
+                continue;
+            };
+            if scaffold.element_count() > 20_000 {
+                continue;
+            }
+            let resolution = 8;
+            let lattice: Box<dyn Lattice> = match scaffold.kind {
+                ElementKind::Tet4 | ElementKind::Tet10 => {
+                    Box::new(super::super::simplex::TetLattice::new(resolution))
+                }
+                ElementKind::Hex8 | ElementKind::Hex20 | ElementKind::Hex27 => {
+                    Box::new(super::super::cube::CubeLattice::new(resolution))
+                }
+                ElementKind::Quad4 | ElementKind::Quad8 | ElementKind::Quad9 => {
+                    Box::new(super::super::square::SquareLattice::new(resolution))
+                }
+                ElementKind::Tri3 | ElementKind::Tri6 => {
+                    Box::new(super::super::triangle::TriangleLattice::new(resolution))
+                }
+            };
+            let per = scaffold.kind.corner_count();
+            let elements = Plain {
+                corners: (0..scaffold.element_count())
+                    .flat_map(|e| scaffold.element(e)[..per].to_vec())
+                    .collect(),
+                per,
+            };
+            let samples = super::super::symmetric_samples(lattice.as_ref(), &SchwarzP(0.4));
+            let local = lattice.contour(&samples);
+            for per_chunk in [elements.count().max(1), 37] {
+                let ([structural, named], by) =
+                    weld_both_ways(&elements, lattice.as_ref(), &local, per_chunk);
+                assert!(structural == named, "{name}, {per_chunk} per chunk");
+                assert!(
+                    by[0] > 0,
+                    "{name}: {} slots paired by structure, {} by name",
+                    by[0],
+                    by[1]
+                );
+            }
+            kinds.insert(scaffold.kind.name());
+        }
+        assert!(kinds.len() >= 8, "kinds tested: {kinds:?}");
     }
 
     #[test]
