@@ -37,7 +37,7 @@ use latticebuild_geom::tile::{
     stream_scaffold, thickness_normal, tile_surface_scaffold,
 };
 use latticebuild_geom::validate::{self, StreamCheck};
-use std::sync::{Arc, mpsc};
+use std::sync::Arc;
 
 use super::artifact::{MeshArtifact, MeshSummary, Planar, TilingSummary};
 use super::chunked::ChunkedHead;
@@ -59,28 +59,6 @@ pub const VERSION: u32 = 4;
 /// (measured on the 100k bracket: 5 % less CPU end to end, peak memory 600 → 230 MB), and
 /// the pipeline fills and drains faster.
 const CHUNK_TRIANGLES: usize = 500_000;
-
-/// Chunks queued for the mesh check besides the one it is checking.
-const CHECKS_IN_FLIGHT: usize = 1;
-
-/// Checks the chunks `receive` brings, on a thread of its own so the tiling of the next chunk
-/// goes on meanwhile. It gets a rayon pool of its own (one thread; the check's result does not
-/// depend on the thread count): the global pool's threads may all be blocked handing chunks
-/// to this thread, and a check waiting on them would never finish.
-fn check_chunks(receive: mpsc::Receiver<Arc<MeshChunk>>) -> Result<validate::MeshCheck, String> {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .thread_name(|_| "mesh-check".into())
-        .build()
-        .map_err(|e| format!("cannot start the mesh check: {e}"))?;
-    Ok(pool.install(|| {
-        let mut check = StreamCheck::new();
-        for chunk in receive {
-            check.push(&chunk);
-        }
-        check.finish()
-    }))
-}
 
 /// What the stage made: a whole mesh (2D tilings), or the head of a mesh whose chunks went to
 /// the `chunks` callback of [`TileStage::run`].
@@ -278,7 +256,7 @@ impl TileStage {
         cells: &[&[u8]],
         file: Option<&[u8]>,
         progress: &dyn StageProgress,
-        chunks: &mut dyn FnMut(Arc<MeshChunk>) -> Result<(), String>,
+        chunks: &mut (dyn FnMut(Arc<MeshChunk>) -> Result<(), String> + Send),
     ) -> Result<TileOutput, String> {
         progress.phase("reading the scaffold");
         let scaffold = self.scaffold(file)?;
@@ -319,32 +297,26 @@ impl TileStage {
                 .tile_surface(&scaffold, &solid, progress)
                 .map(TileOutput::Whole);
         }
-        let (stats, check) = std::thread::scope(|scope| {
-            let (send, receive) = mpsc::sync_channel::<Arc<MeshChunk>>(CHECKS_IN_FLIGHT);
-            let checker = scope.spawn(move || check_chunks(receive));
-            let stats = stream_scaffold(
-                &scaffold,
-                &solid,
-                self.skin,
-                self.resolution,
-                chunk_elements_for(self.resolution, CHUNK_TRIANGLES),
-                &mut |chunk| {
-                    let chunk = Arc::new(chunk);
-                    send.send(Arc::clone(&chunk))
-                        .map_err(|_| "the mesh check stopped".to_string())?;
-                    chunks(chunk)
-                },
-            );
-            drop(send);
-            progress.phase("checking the mesh");
-            let check = checker
-                .join()
-                .map_err(|_| "the mesh check panicked".to_string())?;
-            // A check that could not start explains the tiling's "check stopped".
-            let check = check?;
-            let stats = stats.map_err(|e| format!("tiling {}: {e}", self.source()))?;
-            Ok::<_, String>((stats, check))
-        })?;
+        // The check takes each chunk on the pool while the next one is tiled (see
+        // `stream_scaffold`'s sink): its parallel parts share both threads with the tiling,
+        // where a check thread of its own was the pipeline's slowest stage.
+        let mut check = StreamCheck::new();
+        let stats = stream_scaffold(
+            &scaffold,
+            &solid,
+            self.skin,
+            self.resolution,
+            chunk_elements_for(self.resolution, CHUNK_TRIANGLES),
+            &mut |chunk| {
+                let chunk = Arc::new(chunk);
+                // Handed on first, so the writers encode while this thread checks.
+                chunks(Arc::clone(&chunk))?;
+                check.push(&chunk);
+                Ok(())
+            },
+        )
+        .map_err(|e| format!("tiling {}: {e}", self.source()))?;
+        let check = check.finish();
         if check.triangles == 0 {
             return Err(format!(
                 "the tiled solid of `outputs.{}` is empty: the cell has no solid part at this \

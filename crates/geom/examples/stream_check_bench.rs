@@ -6,12 +6,14 @@
 //!   mesh never exists, so the process's peak is the streaming part's.
 //! - `torus-both N M ROWS`: both on one mesh, results compared field by field.
 //! - `tile ELEMENTS RESOLUTION TRIANGLES`: Schwarz P tiled into a grid of about ELEMENTS
-//!   tetrahedra; `check` of the mesh, then `StreamCheck` over `MeshChunk::split` chunks.
+//!   tetrahedra; `check` of the mesh, then `StreamCheck` over `MeshChunk::split` chunks, then
+//!   the binary STL writer into a sink.
 //!
 //! `cargo run --release -p latticebuild-geom --example stream_check_bench -- torus-stream 4096 4096 512`
 
 use latticebuild_geom::field::{ScalarField, Solid};
 use latticebuild_geom::mesh::{Mesh, MeshChunk};
+use latticebuild_geom::mesh_io::{Encoding, Format, write_mesh};
 use latticebuild_geom::scaffold::{ElementKind, grid};
 use latticebuild_geom::tile::{TiledSolid, tile_scaffold};
 use latticebuild_geom::validate::{MeshCheck, StreamCheck, check};
@@ -246,4 +248,22 @@ fn tile(elements: usize, resolution: usize, per_chunk: usize) {
     let triangles = mesh.triangles.len();
     let streamed = time_stream(chunks.into_iter(), triangles);
     compare(&whole, &streamed);
+    time_stl(&mesh);
+}
+
+/// The binary STL writer on the same mesh, into a sink: what the output side of a tiled
+/// build costs per triangle besides the check.
+fn time_stl(mesh: &Mesh) {
+    let mut best = f64::INFINITY;
+    for _ in 0..3 {
+        let start = Instant::now();
+        if let Err(e) = write_mesh(mesh, Format::Stl, Encoding::Binary, &mut std::io::sink()) {
+            return eprintln!("writing STL failed: {e}");
+        }
+        best = best.min(start.elapsed().as_secs_f64());
+    }
+    println!(
+        "binary STL: best of 3 {best:.3} s = {:.1} M triangles/s",
+        mesh.triangles.len() as f64 / best / 1e6
+    );
 }

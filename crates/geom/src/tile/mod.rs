@@ -23,8 +23,9 @@
 //! 4. **Caps** are kept on scaffold boundary faces (faces used by one element) only.
 //! 5. **Streaming.** Elements are taken in a Morton order of their centroids (`scaffold.rs`)
 //!    and welded a chunk at a time ([`stream_scaffold`], `weld::Welder`): memory holds one
-//!    chunk's local meshes and output, and the vertices later chunks may still use. The
-//!    chunks of any size concatenate to the one-chunk mesh bit for bit.
+//!    chunk's local meshes and output, the chunk before it (being taken by the sink, on the
+//!    pool, while this one is made) and the vertices later chunks may still use. The chunks
+//!    of any size concatenate to the one-chunk mesh bit for bit.
 //!
 //! 2D scaffolds (tri, quad) are tiled by the same steps into a planar or surface region, see
 //! `planar.rs` ([`tile_surface_scaffold`]); choose by `ElementKind::dimension()`.
@@ -365,12 +366,18 @@ fn tile_on(
     Ok((mesh, stats))
 }
 
-/// Where a streamed tiling's chunks go, in order; an error stops the tiling.
-pub type ChunkSink<'s> = dyn FnMut(MeshChunk) -> Result<(), String> + 's;
+/// Where a streamed tiling's chunks go, in order; an error stops the tiling. It runs on a
+/// rayon thread while the next chunk is made, so it may use the pool (its parallel work
+/// shares the threads with the tiling's), and should not block for long.
+pub type ChunkSink<'s> = dyn FnMut(MeshChunk) -> Result<(), String> + Send + 's;
 
 /// [`tile_on`], handing the mesh to `sink` a chunk of `chunk_elements` elements at a time (at
 /// least one chunk, even for no elements): memory holds one chunk's local meshes and output,
-/// and the vertices open between chunks.
+/// the chunk before it (in the sink), and the vertices open between chunks.
+///
+/// Chunk `k + 1` is made while the sink takes chunk `k` (`rayon::join`), so a sink that
+/// checks or encodes in parallel keeps both halves of the pool busy without a thread of its
+/// own competing with them.
 fn stream_on(
     elements: &dyn Corners,
     nodes: Nodes,
@@ -385,30 +392,50 @@ fn stream_on(
     let chunks = count.div_ceil(per_chunk).max(1);
     let mut welder = Welder::new(elements, lattice, chunks > 1)?;
     let cell = symmetric_samples(lattice, solid.cell);
-    let mut emit = |chunk: MeshChunk| sink(chunk).map_err(TileError::Sink);
+    let mut made: Option<MeshChunk> = None;
+    let mut emit_made = |made: Option<MeshChunk>| match made {
+        Some(chunk) => sink(chunk).map_err(TileError::Sink),
+        None => Ok(()),
+    };
     if solid.is_uniform() && skin.is_none() {
         let values: Vec<f64> = cell.iter().map(|&v| solid.solid.apply(v)).collect();
         let local = lattice.contour(&values);
         for _ in 0..chunks {
-            emit(welder.chunk(per_chunk, Locals::Uniform(&local))?)?;
+            let previous = made.take();
+            let (chunk, emitted) = rayon::join(
+                || welder.chunk(per_chunk, Locals::Uniform(&local)),
+                || emit_made(previous),
+            );
+            emitted?;
+            made = Some(chunk?);
         }
+        emit_made(made)?;
         return Ok(welder.stats());
     }
     let samples = ElementSamples::new(lattice, solid, cell, nodes)?.with_skin(skin);
     for k in 0..chunks {
         let range = k * per_chunk..((k + 1) * per_chunk).min(count);
-        let locals: Vec<local::LocalMesh> = range
-            .into_par_iter()
-            .map_init(
-                || vec![f64::NAN; lattice.index_len()],
-                |values, e| {
-                    samples.fill(e, values);
-                    lattice.contour(values)
-                },
-            )
-            .collect();
-        emit(welder.chunk(per_chunk, Locals::PerElement(&locals))?)?;
+        let previous = made.take();
+        let (chunk, emitted) = rayon::join(
+            || {
+                let locals: Vec<local::LocalMesh> = range
+                    .into_par_iter()
+                    .map_init(
+                        || vec![f64::NAN; lattice.index_len()],
+                        |values, e| {
+                            samples.fill(e, values);
+                            lattice.contour(values)
+                        },
+                    )
+                    .collect();
+                welder.chunk(per_chunk, Locals::PerElement(&locals))
+            },
+            || emit_made(previous),
+        );
+        emitted?;
+        made = Some(chunk?);
     }
+    emit_made(made)?;
     Ok(welder.stats())
 }
 
