@@ -601,14 +601,16 @@ fn closed_fan(fan: &[u64], vertex: u32, table: &mut [u8; 256], sums: &mut FanSum
         // Corner numbers are below SMALL_FAN, so they fit a byte.
         *entry = j as u8 + 1;
     }
-    let mut sigma = [0u8; SMALL_FAN];
+    // σ packed a corner per nibble (SMALL_FAN = 16 corners fill the 64 bits): following it
+    // is then a shift and a mask in registers, not a load per step.
+    let mut sigma = 0u64;
     let mut matched = true;
     let mut image = 0u32;
     for (i, &w) in next.iter().enumerate() {
         // An empty slot (0) wraps to a lane that the comparison below rejects.
         let j = usize::from(table[slot(w)].wrapping_sub(1)) % SMALL_FAN;
         matched &= j < k && prev[j] == w;
-        sigma[i] = j as u8;
+        sigma |= (j as u64) << (4 * i);
         image |= 1 << j;
     }
     for &w in prev {
@@ -625,30 +627,30 @@ fn closed_fan(fan: &[u64], vertex: u32, table: &mut [u8; 256], sums: &mut FanSum
         return false;
     }
 
-    // Count the cycles of σ; almost always one, found in k steps from corner 0.
-    let mut visited = 0u32;
-    let mut cycles = 0;
-    while visited != all {
-        let start = (!visited & all).trailing_zeros() as usize;
-        cycles += 1;
-        let mut corner = start;
-        while visited & (1 << corner) == 0 {
-            visited |= 1 << corner;
-            corner = usize::from(sigma[corner]);
-        }
+    // σ is a permutation of the k corners. Almost always it is one cycle: the walk from
+    // corner 0 comes back after exactly k steps.
+    let step = |corner: usize| ((sigma >> (4 * corner)) & 0xf) as usize;
+    let mut corner = step(0);
+    let mut length = 1;
+    while corner != 0 && length < k {
+        corner = step(corner);
+        length += 1;
     }
+    let one_cycle = corner == 0 && length == k;
     // Each edge {v, w} appears once among the outgoing ends; count it from its lower end.
     sums.edges += next.iter().filter(|&&w| w > vertex).count();
-    if cycles > 1 {
+    if !one_cycle {
+        // Several pieces: the vertex is a pinch.
         sums.nonmanifold_vertices += 1;
     }
     true
 }
 
-/// `σ` of [`closed_fan`] by comparing every outgoing end with every incoming end, or `None`
+/// `σ` of [`closed_fan`] (packed a corner per nibble) by comparing every outgoing end with
+/// every incoming end, or `None`
 /// when some outgoing end has no match or several, or two corners match the same one.
-fn pairwise_matching(next: &[u32], prev: &[u32]) -> Option<[u8; SMALL_FAN]> {
-    let mut sigma = [0u8; SMALL_FAN];
+fn pairwise_matching(next: &[u32], prev: &[u32]) -> Option<u64> {
+    let mut sigma = 0u64;
     let mut image = 0u32;
     for (i, &w) in next.iter().enumerate() {
         let mut matches = 0u32;
@@ -659,7 +661,7 @@ fn pairwise_matching(next: &[u32], prev: &[u32]) -> Option<[u8; SMALL_FAN]> {
             return None;
         }
         image |= matches;
-        sigma[i] = matches.trailing_zeros() as u8;
+        sigma |= u64::from(matches.trailing_zeros()) << (4 * i);
     }
     Some(sigma)
 }
