@@ -37,15 +37,35 @@ where
     T: Sync,
     F: Fn(&mut Vec<u8>, &T) + Sync,
 {
+    write_blocks_by(workers, out, items, per_block, |buf, block| {
+        for item in block {
+            encode(buf, item);
+        }
+    })
+}
+
+/// Encodes `items` a block (at most `per_block` items) at a time with `encode_block`, which
+/// appends the block's records to the buffer, and writes the result to `out` in order: by the
+/// rayon pool while the calling thread writes (`Workers::Pool`, as [`write_encoded`]), or by
+/// the caller alone. For encoders that gain from seeing many records at once.
+pub(super) fn write_blocks_by<T, F>(
+    workers: Workers,
+    out: &mut dyn Write,
+    items: &[T],
+    per_block: usize,
+    encode_block: F,
+) -> io::Result<()>
+where
+    T: Sync,
+    F: Fn(&mut Vec<u8>, &[T]) + Sync,
+{
     match workers {
-        Workers::Pool => write_encoded(out, items, per_block, encode),
+        Workers::Pool => write_encoded_blocks(out, items, per_block, encode_block),
         Workers::Caller => {
             let mut buf = Vec::new();
             for block in items.chunks(per_block.max(1)) {
                 buf.clear();
-                for item in block {
-                    encode(&mut buf, item);
-                }
+                encode_block(&mut buf, block);
                 out.write_all(&buf)?;
             }
             Ok(())
@@ -69,6 +89,24 @@ where
     T: Sync,
     F: Fn(&mut Vec<u8>, &T) + Sync,
 {
+    write_encoded_blocks(out, items, per_block, |buf, block| {
+        for item in block {
+            encode(buf, item);
+        }
+    })
+}
+
+/// [`write_encoded`] with an encoder of whole blocks.
+fn write_encoded_blocks<T, F>(
+    out: &mut dyn Write,
+    items: &[T],
+    per_block: usize,
+    encode_block: F,
+) -> io::Result<()>
+where
+    T: Sync,
+    F: Fn(&mut Vec<u8>, &[T]) + Sync,
+{
     let per_block = per_block.max(1);
     // Two blocks per thread keeps every thread busy even when blocks encode at uneven speed.
     let blocks_per_batch = 2 * rayon::current_num_threads().max(1);
@@ -82,9 +120,7 @@ where
             .zip(batch.par_chunks(per_block))
             .for_each(|(buf, chunk)| {
                 buf.clear();
-                for item in chunk {
-                    encode(buf, item);
-                }
+                encode_block(buf, chunk);
             });
     };
     let blocks_in = |batch: &[T]| batch.len().div_ceil(per_block);
