@@ -49,9 +49,9 @@
 //!   unreferenced.
 
 use super::{
-    Entry, FanScratch, FanSums, Index, MAX_PARTS, MeshCheck, NEXT, PARTITION_SIZE, PREV, SMALL_FAN,
-    TRIANGLE_CHUNK, TriangleSums, VERTEX_BLOCK, VERTEX_CHUNK, VertexSums, closed_fan, general_fan,
-    link, report,
+    Entry, FanScratch, FanSums, Index, MAX_PARTS, MeshCheck, NEXT, PARTITION_SIZE, PREV,
+    PendingTriangles, SMALL_FAN, TRIANGLE_CHUNK, TriangleSums, VERTEX_BLOCK, VERTEX_CHUNK,
+    VertexSums, closed_fan, general_fan, link, report,
 };
 use crate::mesh::MeshChunk;
 use rayon::prelude::*;
@@ -305,16 +305,18 @@ impl StreamCheck {
         let alive = Alive::new(&prev, &view);
         let first = view.first;
         let borrowed = &view.borrowed[..alive.borrowed_local.len()];
-        let lookup = |v: u32| -> Option<(u32, [f32; 3])> {
+        // The position by reference: a copy inside the `Option` went through the stack, where
+        // the wider loads of it could not be forwarded from the narrower stores.
+        let lookup = |v: u32| -> Option<(u32, &[f32; 3])> {
             let id = u64::from(v);
             if id >= first {
                 let k = (id - first) as usize;
                 view.vertices
                     .get(k)
-                    .map(|p| ((alive.earlier + k) as u32, *p))
+                    .map(|p| ((alive.earlier + k) as u32, p))
             } else {
                 let j = borrowed.binary_search_by_key(&v, |&(id, _)| id).ok()?;
-                Some((alive.borrowed_local[j], borrowed[j].1))
+                Some((alive.borrowed_local[j], &borrowed[j].1))
             }
         };
         let n = alive.earlier + view.vertices.len();
@@ -404,11 +406,11 @@ impl StreamCheck {
     /// Sums the geometry of the view's triangles into the global triangle chunks, and gives
     /// each triangle's local corners (`INVALID` for invalid triangles) and the corner counts
     /// at every alive vertex, one array per part.
-    fn triangle_pass<I: Counts>(
+    fn triangle_pass<'p, I: Counts>(
         &mut self,
         view: &View,
         n: usize,
-        lookup: &(impl Fn(u32) -> Option<(u32, [f32; 3])> + Sync),
+        lookup: &(impl Fn(u32) -> Option<(u32, &'p [f32; 3])> + Sync),
         reference: [f64; 3],
         mut locals: Vec<[u32; 3]>,
         pool: &mut Vec<Vec<u32>>,
@@ -454,6 +456,7 @@ impl StreamCheck {
                     } else {
                         TriangleSums::default()
                     };
+                    let mut pending = PendingTriangles::default();
                     for (tri, local) in view.triangles[start..end]
                         .iter()
                         .zip(&mut out[start - base..end - base])
@@ -471,11 +474,13 @@ impl StreamCheck {
                             *degree = I::from_usize(degree.to_usize() + 1);
                         }
                         sums.add_triangle(
+                            &mut pending,
                             tri,
                             [a.1, b.1, c.1].map(|p| p.map(f64::from)),
                             reference,
                         );
                     }
+                    sums.flush(&mut pending);
                     sums_of.push(sums);
                 }
                 (sums_of, degrees)
