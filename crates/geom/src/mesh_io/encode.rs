@@ -89,11 +89,7 @@ where
     T: Sync,
     F: Fn(&mut Vec<u8>, &T) + Sync,
 {
-    write_encoded_blocks(out, items, per_block, |buf, block| {
-        for item in block {
-            encode(buf, item);
-        }
-    })
+    write_encoded_by(Workers::Pool, out, items, per_block, encode)
 }
 
 /// [`write_encoded`] with an encoder of whole blocks.

@@ -392,51 +392,57 @@ fn stream_on(
     let chunks = count.div_ceil(per_chunk).max(1);
     let mut welder = Welder::new(elements, lattice, chunks > 1)?;
     let cell = symmetric_samples(lattice, solid.cell);
-    let mut made: Option<MeshChunk> = None;
-    let mut emit_made = |made: Option<MeshChunk>| match made {
-        Some(chunk) => sink(chunk).map_err(TileError::Sink),
-        None => Ok(()),
-    };
     if solid.is_uniform() && skin.is_none() {
         let values: Vec<f64> = cell.iter().map(|&v| solid.solid.apply(v)).collect();
         let local = lattice.contour(&values);
-        for _ in 0..chunks {
-            let previous = made.take();
-            let (chunk, emitted) = rayon::join(
-                || welder.chunk(per_chunk, Locals::Uniform(&local)),
-                || emit_made(previous),
-            );
-            emitted?;
-            made = Some(chunk?);
-        }
-        emit_made(made)?;
+        pipeline(
+            chunks,
+            |_| welder.chunk(per_chunk, Locals::Uniform(&local)),
+            sink,
+        )?;
         return Ok(welder.stats());
     }
     let samples = ElementSamples::new(lattice, solid, cell, nodes)?.with_skin(skin);
+    pipeline(
+        chunks,
+        |k| {
+            let range = k * per_chunk..((k + 1) * per_chunk).min(count);
+            let locals: Vec<local::LocalMesh> = range
+                .into_par_iter()
+                .map_init(
+                    || vec![f64::NAN; lattice.index_len()],
+                    |values, e| {
+                        samples.fill(e, values);
+                        lattice.contour(values)
+                    },
+                )
+                .collect();
+            welder.chunk(per_chunk, Locals::PerElement(&locals))
+        },
+        sink,
+    )?;
+    Ok(welder.stats())
+}
+
+/// Makes chunks `0..chunks` in order with `make`, handing each to `sink` while the next one
+/// is made (`rayon::join`); the first error stops both.
+fn pipeline(
+    chunks: usize,
+    mut make: impl FnMut(usize) -> Result<MeshChunk, TileError> + Send,
+    sink: &mut ChunkSink,
+) -> Result<(), TileError> {
+    let mut emit = |made: Option<MeshChunk>| match made {
+        Some(chunk) => sink(chunk).map_err(TileError::Sink),
+        None => Ok(()),
+    };
+    let mut made = None;
     for k in 0..chunks {
-        let range = k * per_chunk..((k + 1) * per_chunk).min(count);
         let previous = made.take();
-        let (chunk, emitted) = rayon::join(
-            || {
-                let locals: Vec<local::LocalMesh> = range
-                    .into_par_iter()
-                    .map_init(
-                        || vec![f64::NAN; lattice.index_len()],
-                        |values, e| {
-                            samples.fill(e, values);
-                            lattice.contour(values)
-                        },
-                    )
-                    .collect();
-                welder.chunk(per_chunk, Locals::PerElement(&locals))
-            },
-            || emit_made(previous),
-        );
+        let (chunk, emitted) = rayon::join(|| make(k), || emit(previous));
         emitted?;
         made = Some(chunk?);
     }
-    emit_made(made)?;
-    Ok(welder.stats())
+    emit(made)
 }
 
 /// Elements per chunk for about `triangles` output triangles per chunk at `resolution`

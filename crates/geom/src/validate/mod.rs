@@ -695,8 +695,8 @@ fn closed_fan(fan: &[u64], vertex: u32, table: &mut [u8; 256], sums: &mut FanSum
 }
 
 /// `σ` of [`closed_fan`] (packed a corner per nibble) by comparing every outgoing end with
-/// every incoming end, or `None`
-/// when some outgoing end has no match or several, or two corners match the same one.
+/// every incoming end, or `None` when some outgoing end has no match or several, or two
+/// corners match the same one.
 fn pairwise_matching(next: &[u32], prev: &[u32]) -> Option<u64> {
     let mut sigma = 0u64;
     let mut image = 0u32;
