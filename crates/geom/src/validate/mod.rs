@@ -62,7 +62,9 @@
 use crate::mesh::Mesh;
 use rayon::prelude::*;
 
+mod closed_fan;
 mod stream;
+use closed_fan::closed_fan;
 pub use stream::StreamCheck;
 
 /// The measurements and verdicts of [`check`]. Counts follow the module definitions.
@@ -530,6 +532,12 @@ impl<I: Index> Links<I> {
     fn at(&self, v: usize) -> &[u64] {
         &self.links[self.offsets[v].to_usize()..self.offsets[v + 1].to_usize()]
     }
+
+    /// The links from `v`'s first on, to the end.
+    #[inline]
+    fn from(&self, v: usize) -> &[u64] {
+        &self.links[self.offsets[v].to_usize()..]
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -571,21 +579,10 @@ struct Side {
 }
 
 /// Per-thread scratch space, reused from vertex to vertex.
+#[derive(Default)]
 struct FanScratch {
     sides: Vec<Side>,
     parent: Vec<u32>,
-    /// The closed-fan check's slot table; all zero between vertices.
-    table: [u8; 256],
-}
-
-impl Default for FanScratch {
-    fn default() -> Self {
-        FanScratch {
-            sides: Vec::new(),
-            parent: Vec::new(),
-            table: [0; 256],
-        }
-    }
 }
 
 /// Fans with at most this many corners try the closed-fan check first (almost every vertex
@@ -605,7 +602,7 @@ fn fan_pass<I: Index>(links: &Links<I>) -> FanSums {
                 if fan.is_empty() {
                     continue;
                 }
-                if fan.len() > SMALL_FAN || !closed_fan(fan, vertex, &mut scratch.table, &mut sums)
+                if fan.len() > SMALL_FAN || !closed_fan(links.from(v), fan.len(), vertex, &mut sums)
                 {
                     general_fan(fan, vertex, scratch, &mut sums);
                 }
@@ -613,105 +610,6 @@ fn fan_pass<I: Index>(links: &Links<I>) -> FanSums {
             sums
         })
         .reduce(FanSums::default, FanSums::merge)
-}
-
-/// The fast path for the common case, a vertex inside a closed surface. It succeeds (and
-/// records the vertex's edges and fan pieces) when every edge `{v, w}` at the vertex is used
-/// exactly twice in opposite directions: no side leads back to `v`, and every corner's
-/// outgoing side `v → w` is matched by exactly one corner's incoming side `w → v`, the matching
-/// `σ` being a permutation of the corners. Going from a corner to its match crosses an edge of
-/// the fan, so the fan's pieces are the cycles of `σ`. Returns `false`, recording nothing,
-/// whenever the general check is needed.
-///
-/// `σ` comes from a direct-mapped table of incoming ends (`table`, all zero between calls)
-/// rather than comparing every pair of corners; when two incoming ends share a slot the
-/// pairwise comparison decides instead.
-#[inline]
-fn closed_fan(fan: &[u64], vertex: u32, table: &mut [u8; 256], sums: &mut FanSums) -> bool {
-    let k = fan.len();
-    let mut next = [0u32; SMALL_FAN];
-    let mut prev = [0u32; SMALL_FAN];
-    let mut loops = false;
-    for (j, &link) in fan.iter().enumerate() {
-        (next[j], prev[j]) = unlink(link);
-        loops |= next[j] == vertex || prev[j] == vertex;
-    }
-    if loops {
-        return false;
-    }
-    let (next, prev) = (&next[..k], &prev[..k]);
-    let slot = |w: u32| (w.wrapping_mul(0x9e37_79b1) >> 24) as usize;
-
-    let mut collided = false;
-    for (j, &w) in prev.iter().enumerate() {
-        let entry = &mut table[slot(w)];
-        collided |= *entry != 0;
-        // Corner numbers are below SMALL_FAN, so they fit a byte.
-        *entry = j as u8 + 1;
-    }
-    // σ packed a corner per nibble (SMALL_FAN = 16 corners fill the 64 bits): following it
-    // is then a shift and a mask in registers, not a load per step.
-    let mut sigma = 0u64;
-    let mut matched = true;
-    let mut image = 0u32;
-    for (i, &w) in next.iter().enumerate() {
-        // An empty slot (0) wraps to a lane that the comparison below rejects.
-        let j = usize::from(table[slot(w)].wrapping_sub(1)) % SMALL_FAN;
-        matched &= j < k && prev[j] == w;
-        sigma |= (j as u64) << (4 * i);
-        image |= 1 << j;
-    }
-    for &w in prev {
-        table[slot(w)] = 0;
-    }
-    let all = u32::MAX >> (32 - k);
-    if collided {
-        // Distinct incoming ends may share a slot: match by comparing every pair.
-        match pairwise_matching(next, prev) {
-            Some(pairwise) => sigma = pairwise,
-            None => return false,
-        }
-    } else if !matched || image != all {
-        return false;
-    }
-
-    // σ is a permutation of the k corners. Almost always it is one cycle: the walk from
-    // corner 0 comes back after exactly k steps.
-    let step = |corner: usize| ((sigma >> (4 * corner)) & 0xf) as usize;
-    let mut corner = step(0);
-    let mut length = 1;
-    while corner != 0 && length < k {
-        corner = step(corner);
-        length += 1;
-    }
-    let one_cycle = corner == 0 && length == k;
-    // Each edge {v, w} appears once among the outgoing ends; count it from its lower end.
-    sums.edges += next.iter().filter(|&&w| w > vertex).count();
-    if !one_cycle {
-        // Several pieces: the vertex is a pinch.
-        sums.nonmanifold_vertices += 1;
-    }
-    true
-}
-
-/// `σ` of [`closed_fan`] (packed a corner per nibble) by comparing every outgoing end with
-/// every incoming end, or `None` when some outgoing end has no match or several, or two
-/// corners match the same one.
-fn pairwise_matching(next: &[u32], prev: &[u32]) -> Option<u64> {
-    let mut sigma = 0u64;
-    let mut image = 0u32;
-    for (i, &w) in next.iter().enumerate() {
-        let mut matches = 0u32;
-        for (j, &incoming) in prev.iter().enumerate() {
-            matches |= u32::from(incoming == w) << j;
-        }
-        if !matches.is_power_of_two() || image & matches != 0 {
-            return None;
-        }
-        image |= matches;
-        sigma |= u64::from(matches.trailing_zeros()) << (4 * i);
-    }
-    Some(sigma)
 }
 
 /// Classifies the edges `{v, w}` with `w > v` and counts the pieces of `v`'s fan, for any fan.
@@ -1030,27 +928,23 @@ mod tests {
             .collect()
     }
 
-    fn check_fan(fan: &[u64], vertex: u32, table: &mut [u8; 256]) -> (FanSums, Option<FanSums>) {
+    fn check_fan(fan: &[u64], vertex: u32) -> (FanSums, Option<FanSums>) {
         let mut general = FanSums::default();
         general_fan(fan, vertex, &mut FanScratch::default(), &mut general);
         let mut fast = FanSums::default();
-        let answered = closed_fan(fan, vertex, table, &mut fast);
-        assert!(
-            table.iter().all(|&t| t == 0),
-            "the slot table is left clean"
-        );
+        let answered = closed_fan(fan, fan.len(), vertex, &mut fast);
         (general, answered.then_some(fast))
     }
 
     #[test]
     fn closed_fan_agrees_with_the_general_check() {
         let mut rng = Lcg(11);
-        let mut table = [0u8; 256];
         let vertex = 500;
         let mut answered = 0;
         for round in 0..100_000 {
-            let k = 2 + rng.below(11) as usize;
-            // Neighbours from a small range, so slot collisions and repeats are common.
+            // Both lane widths: up to SMALL_FAN / 2 corners and up to SMALL_FAN.
+            let k = 2 + rng.below(SMALL_FAN as u32 - 1) as usize;
+            // Neighbours from a small range, so repeats are common.
             let neighbour = |rng: &mut Lcg| {
                 if rng.below(8) == 0 {
                     vertex
@@ -1089,7 +983,7 @@ mod tests {
             for i in (1..fan.len()).rev() {
                 fan.swap(i, rng.below(i as u32 + 1) as usize);
             }
-            let (general, fast) = check_fan(&fan, vertex, &mut table);
+            let (general, fast) = check_fan(&fan, vertex);
             if let Some(fast) = fast {
                 assert_eq!(fast, general, "fan {fan:x?}");
                 answered += 1;
@@ -1102,22 +996,26 @@ mod tests {
     }
 
     #[test]
-    fn colliding_slots_fall_back_to_pairwise_matching() {
-        let slot = |w: u32| w.wrapping_mul(0x9e37_79b1) >> 24;
-        let a = 7;
-        let b = (8..)
-            .find(|&w| slot(w) == slot(a))
-            .expect("a colliding value");
-        let mut table = [0u8; 256];
-        for ring in [[a, b, 3, 4], [3, a, 4, b]] {
-            let (general, fast) = check_fan(&ring_fan(&ring), 0, &mut table);
+    fn closed_fans_at_the_lane_widths() {
+        // Rings that fill the narrow lanes, spill into the wide ones, and fill those.
+        for k in [3, SMALL_FAN / 2, SMALL_FAN / 2 + 1, SMALL_FAN] {
+            let ring: Vec<u32> = (1..=k as u32).map(|w| 10 * w).collect();
+            let (general, fast) = check_fan(&ring_fan(&ring), 0);
             assert_eq!(fast, Some(general));
-            assert_eq!((general.edges, general.nonmanifold_vertices), (4, 0));
+            assert_eq!((general.edges, general.nonmanifold_vertices), (k, 0));
         }
-        // Two rings pinched at the vertex, with colliding neighbours across them.
-        let pinched = [ring_fan(&[a, 2, 3]), ring_fan(&[b, 5, 6])].concat();
-        let (general, fast) = check_fan(&pinched, 0, &mut table);
+        // Two rings of eight pinched at the vertex: sixteen corners, two pieces.
+        let a: Vec<u32> = (1..=8).collect();
+        let b: Vec<u32> = (11..=18).collect();
+        let pinched = [ring_fan(&a), ring_fan(&b)].concat();
+        let (general, fast) = check_fan(&pinched, 0);
         assert_eq!(fast, Some(general));
-        assert_eq!(general.nonmanifold_vertices, 1);
+        assert_eq!((general.edges, general.nonmanifold_vertices), (16, 1));
+        // A ring with one side missing is left to the general check, which finds a boundary.
+        let mut open = ring_fan(&a);
+        open.pop();
+        let (general, fast) = check_fan(&open, 0);
+        assert_eq!(fast, None);
+        assert!(general.boundary > 0);
     }
 }

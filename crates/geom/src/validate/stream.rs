@@ -721,7 +721,12 @@ fn fan_pass<I: Index>(
                 }
                 let vertex = id_of(v);
                 if fan.len() > SMALL_FAN
-                    || !closed_fan(fan, vertex, &mut scratch.table, &mut pass.sums)
+                    || !closed_fan(
+                        &links[offsets[v].to_usize()..],
+                        fan.len(),
+                        vertex,
+                        &mut pass.sums,
+                    )
                 {
                     general_fan(fan, vertex, scratch, &mut pass.sums);
                 }
