@@ -127,11 +127,7 @@ mod sse2 {
     /// hold whatever follows the fan and are masked off.
     #[inline]
     #[target_feature(enable = "sse2")]
-    fn matching_in<const GROUPS: usize>(
-        window: &[u64],
-        k: usize,
-        vertex: u32,
-    ) -> Option<u64> {
+    fn matching_in<const GROUPS: usize>(window: &[u64], k: usize, vertex: u32) -> Option<u64> {
         let mut padded = [0u64; SMALL_FAN];
         let links = match window.get(..4 * GROUPS) {
             Some(links) => links,

@@ -56,6 +56,7 @@ use super::{
 use crate::mesh::MeshChunk;
 use rayon::prelude::*;
 use std::borrow::Cow;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// One past the largest vertex id a triangle can name.
 const ID_SPACE: u64 = 1 << 32;
@@ -404,8 +405,8 @@ impl StreamCheck {
     }
 
     /// Sums the geometry of the view's triangles into the global triangle chunks, and gives
-    /// each triangle's local corners (`INVALID` for invalid triangles) and the corner counts
-    /// at every alive vertex, one array per part.
+    /// each triangle's local corners (`INVALID` for invalid triangles) and, for each part (a
+    /// range of triangles, the ranges in order), the corner counts at every alive vertex.
     fn triangle_pass<'p, I: Counts>(
         &mut self,
         view: &View,
@@ -414,7 +415,7 @@ impl StreamCheck {
         reference: [f64; 3],
         mut locals: Vec<[u32; 3]>,
         pool: &mut Vec<Vec<u32>>,
-    ) -> (Vec<[u32; 3]>, Vec<Vec<I>>) {
+    ) -> (Vec<[u32; 3]>, Vec<Part<I>>) {
         let count = view.triangles.len();
         // Segments cut where the global triangle index is a multiple of TRIANGLE_CHUNK, so the
         // sums are check's, term for term and in the same order.
@@ -487,9 +488,12 @@ impl StreamCheck {
             })
             .collect();
 
+        let ranges = segments
+            .chunks(per_part)
+            .map(|part| part[0].0..part[part.len() - 1].1);
         let mut degrees = Vec::with_capacity(results.len());
         let mut segment = segments.iter();
-        for (sums_of, part_degrees) in results {
+        for ((sums_of, counts), triangles) in results.into_iter().zip(ranges) {
             for sums in sums_of {
                 let end = segment.next().map_or(0, |s| s.1);
                 if (offset + end).is_multiple_of(TRIANGLE_CHUNK) {
@@ -499,7 +503,7 @@ impl StreamCheck {
                     self.partial = sums;
                 }
             }
-            degrees.push(part_degrees);
+            degrees.push(Part { triangles, counts });
         }
         self.triangles += count;
         (locals, degrees)
@@ -584,15 +588,25 @@ impl Alive {
     }
 }
 
-/// The counting sort's scatter, as in `check` (`Links::scatter`): each thread owns a range of
-/// alive vertices and places their corners, first those carried for open vertices, then the
-/// view's in triangle order. Returns the offsets and the corners (links).
+/// The corner counts of one part of the triangle pass: its range of the view's triangles and
+/// the corners they put at every alive vertex. [`scatter`] turns the counts into the part's
+/// cursors.
+struct Part<I> {
+    triangles: std::ops::Range<usize>,
+    counts: Vec<I>,
+}
+
+/// The counting sort's scatter: vertex `v`'s corners are those carried for it (if it was
+/// open), then those of each part's triangles, parts in order, each in triangle order. Each
+/// part places the corners of its own triangles, in slots no other part writes; where `check`
+/// (`Links::scatter`) has each thread own a range of vertices and scan every triangle, here
+/// every triangle is read once. Returns the offsets and the corners (links).
 fn scatter<I: Counts>(
     prev: &OpenSet,
     alive: &Alive,
     view: &View,
     locals: &[[u32; 3]],
-    degrees: Vec<Vec<I>>,
+    mut parts: Vec<Part<I>>,
     mut links: Vec<u64>,
     scratch: &mut Scratch,
 ) -> (Vec<I>, Vec<u64>) {
@@ -606,63 +620,74 @@ fn scatter<I: Counts>(
             _ => &[],
         }
     };
-    // cursors[v + 1] = start of v for now; each advances to the start of v + 1.
-    let mut cursors = I::take(&mut scratch.counts, n + 1);
+    // offsets[v] is where v's corners start; each part's count at v becomes where its first
+    // corner at v goes.
+    let mut offsets = I::take(&mut scratch.counts, n + 1);
     let mut total = 0;
-    for v in 0..n {
-        cursors[v + 1] = I::from_usize(total);
-        total += carried(v).len() + degrees.iter().map(|d| d[v].to_usize()).sum::<usize>();
+    for (v, offset) in offsets[..n].iter_mut().enumerate() {
+        *offset = I::from_usize(total);
+        total += carried(v).len();
+        for part in parts.iter_mut() {
+            let count = part.counts[v].to_usize();
+            part.counts[v] = I::from_usize(total);
+            total += count;
+        }
     }
-    for part in degrees {
-        I::give(&mut scratch.counts, part);
-    }
+    offsets[n] = I::from_usize(total);
 
-    let parts = rayon::current_num_threads().max(1);
-    let part_len = n.div_ceil(parts).max(1);
     // Every slot is written below: the old contents need no clearing.
     links.truncate(total);
     links.resize(total, 0);
-    let mut link_parts = Vec::with_capacity(parts);
-    let mut rest = links.as_mut_slice();
-    let mut taken = 0;
-    for part in 1..parts {
-        let boundary = cursors
-            .get(part * part_len + 1)
-            .map_or(total, |s| s.to_usize());
-        let (head, tail) = rest.split_at_mut(boundary.max(taken) - taken);
-        link_parts.push(head);
-        taken = boundary.max(taken);
-        rest = tail;
+    for (v, offset) in offsets[..alive.earlier].iter().enumerate() {
+        let held = carried(v);
+        let at = offset.to_usize();
+        links[at..at + held.len()].copy_from_slice(held);
     }
-    link_parts.push(rest);
-    cursors[1..]
-        .par_chunks_mut(part_len)
-        .zip(link_parts)
-        .enumerate()
-        .for_each(|(part, (cursors, links))| {
-            let first = part * part_len;
-            let base = cursors.first().map_or(0, |c| c.to_usize());
-            for (k, cursor) in cursors.iter_mut().enumerate() {
-                let held = carried(first + k);
-                let at = cursor.to_usize() - base;
-                links[at..at + held.len()].copy_from_slice(held);
-                *cursor = I::from_usize(cursor.to_usize() + held.len());
+    let place = |slots: &[AtomicU64], part: &mut Part<I>| {
+        let range = part.triangles.clone();
+        for (local, tri) in locals[range.clone()].iter().zip(&view.triangles[range]) {
+            if local[0] == INVALID {
+                continue;
             }
-            for (local, tri) in locals.iter().zip(view.triangles) {
-                if local[0] == INVALID {
-                    continue;
-                }
-                for corner in 0..3 {
-                    let at_vertex = (local[corner] as usize).wrapping_sub(first);
-                    if let Some(cursor) = cursors.get_mut(at_vertex) {
-                        let at = cursor.to_usize();
-                        links[at - base] = link(tri[NEXT[corner]], tri[PREV[corner]]);
-                        *cursor = I::from_usize(at + 1);
-                    }
-                }
+            for corner in 0..3 {
+                let cursor = &mut part.counts[local[corner] as usize];
+                let at = cursor.to_usize();
+                // Relaxed: the parts write disjoint slots, and rayon's join orders the writes
+                // before the reads of the fan pass. A plain store on the targets we know.
+                slots[at].store(
+                    link(tri[NEXT[corner]], tri[PREV[corner]]),
+                    Ordering::Relaxed,
+                );
+                *cursor = I::from_usize(at + 1);
             }
-        });
-    (cursors, links)
+        }
+    };
+    match as_atomic(&mut links) {
+        Some(slots) => parts.par_iter_mut().for_each(|part| place(slots, part)),
+        None => {
+            // Not aligned for atomics (a platform where u64 is less aligned): one pass.
+            let slots: Vec<AtomicU64> = links.iter().map(|&l| AtomicU64::new(l)).collect();
+            parts.iter_mut().for_each(|part| place(&slots, part));
+            links = slots.into_iter().map(AtomicU64::into_inner).collect();
+        }
+    }
+    for part in parts {
+        I::give(&mut scratch.counts, part.counts);
+    }
+    (offsets, links)
+}
+
+/// `links` as atomics, so the parts of the scatter can fill disjoint slots of it from several
+/// threads without `unsafe` writes; `None` where `u64` is less aligned than `AtomicU64`.
+fn as_atomic(links: &mut [u64]) -> Option<&[AtomicU64]> {
+    if !links.as_ptr().cast::<AtomicU64>().is_aligned() {
+        return None;
+    }
+    // SAFETY: AtomicU64 has the size and bit validity of u64, and the alignment is checked
+    // above; the exclusive borrow of `links` is held for as long as the atomics live, so
+    // nothing else reads or writes the memory meanwhile (what `AtomicU64::from_mut_slice`,
+    // not yet stable, does).
+    Some(unsafe { &*(links as *mut [u64] as *const [AtomicU64]) })
 }
 
 struct FanPass {

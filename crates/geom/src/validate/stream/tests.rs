@@ -511,6 +511,28 @@ fn results_do_not_depend_on_the_thread_count() {
 }
 
 #[test]
+fn the_scatter_parts_place_every_corner_of_garbage_too() {
+    // Chunks of several triangle-pass parts (more than TRIANGLE_CHUNK triangles each), with
+    // invalid, repeated and far-apart indices: every part places its own triangles' corners.
+    let mut rng = Rng(17);
+    let mesh = random_mesh(&mut rng, 3_000, 150_000);
+    let whole = check(&mesh);
+    for threads in [1, 2, 4] {
+        let streamed = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map(|pool| pool.install(|| stream(&MeshChunk::split(&mesh, 100_000))))
+            .expect("a thread pool");
+        let mut expected = whole.clone();
+        // Duplicates are matched within windows only (the documented exception).
+        expected.duplicate_positions = streamed.duplicate_positions;
+        expected.manifold = false;
+        assert_same(&streamed, &expected, &format!("{threads} threads"));
+        assert!(streamed.nonmanifold_edges > 0 && streamed.invalid_triangles > 0);
+    }
+}
+
+#[test]
 fn duplicates_far_apart_are_the_documented_exception() {
     // Two unwelded cubes face to face: whole, the four shared positions count; one triangle
     // per chunk, the first cube's vertices have finished before the second's arrive.
