@@ -921,6 +921,52 @@ mod tests {
         }
     }
 
+    #[test]
+    fn triangle_sums_are_the_one_at_a_time_sums_bit_for_bit() {
+        // The lanes of `flush` against the definitions written out per triangle, for every
+        // count of pending triangles at the end (0 to 7 left over).
+        let mut rng = Lcg(23);
+        let coordinate = |rng: &mut Lcg| f64::from(rng.below(2001)) * 0.37 - 370.0;
+        for count in 90usize..106 {
+            let reference = [1.5, -2.25, 0.125];
+            let triangles: Vec<[[f64; 3]; 3]> = (0..count)
+                .map(|_| [0; 3].map(|_| [0; 3].map(|_| coordinate(&mut rng))))
+                .collect();
+            let mut sums = TriangleSums::default();
+            let mut pending = PendingTriangles::default();
+            for (t, corners) in triangles.iter().enumerate() {
+                // Every tenth triangle has a repeated index.
+                let tri = if t % 10 == 0 { [0, 0, 1] } else { [0, 1, 2] };
+                sums.add_triangle(&mut pending, &tri, *corners, reference);
+            }
+            sums.flush(&mut pending);
+            let (mut six_volume, mut twice_area, mut vector) = (0.0, 0.0, [0.0f64; 3]);
+            for [a, b, c] in &triangles {
+                let (u, v) = (
+                    [0, 1, 2].map(|i| b[i] - a[i]),
+                    [0, 1, 2].map(|i| c[i] - a[i]),
+                );
+                let n = [
+                    u[1] * v[2] - u[2] * v[1],
+                    u[2] * v[0] - u[0] * v[2],
+                    u[0] * v[1] - u[1] * v[0],
+                ];
+                six_volume += dot([0, 1, 2].map(|i| a[i] - reference[i]), n);
+                twice_area += dot(n, n).sqrt();
+                for i in 0..3 {
+                    vector[i] += n[i];
+                }
+            }
+            assert_eq!(sums.six_volume.to_bits(), six_volume.to_bits(), "{count}");
+            assert_eq!(sums.twice_area.to_bits(), twice_area.to_bits(), "{count}");
+            assert_eq!(
+                sums.twice_vector_area.map(f64::to_bits),
+                vector.map(f64::to_bits)
+            );
+            assert_eq!(sums.degenerate, count.div_ceil(10), "{count}");
+        }
+    }
+
     /// The corners of a closed fan round `ring`: triangles `[v, ring[i], ring[i + 1]]`.
     fn ring_fan(ring: &[u32]) -> Vec<u64> {
         (0..ring.len())
