@@ -19,7 +19,7 @@
 //! method) made a chain of dependent loads per corner; the compiler does not turn the
 //! portable loop's per-lane booleans into a lane mask by itself.
 
-use super::{FanSums, SMALL_FAN};
+use super::{FanSums, SMALL_FAN, unlink};
 
 /// Records the edges and fan pieces of `vertex` and returns `true` when its `k` corners,
 /// `window[..k]`, make a closed fan (see the module documentation); else returns `false`,
@@ -71,9 +71,8 @@ fn matching(window: &[u64], k: usize, vertex: u32) -> Option<u64> {
 /// elsewhere.
 #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
 fn portable_matching(fan: &[u64], vertex: u32) -> Option<u64> {
-    let ends = |link: u64| (link as u32, (link >> 32) as u32);
     if fan.iter().any(|&link| {
-        let (next, prev) = ends(link);
+        let (next, prev) = unlink(link);
         next == vertex || prev == vertex
     }) {
         return None;
@@ -81,10 +80,10 @@ fn portable_matching(fan: &[u64], vertex: u32) -> Option<u64> {
     let mut sigma = 0u64;
     let mut image = 0u32;
     for (i, &outgoing) in fan.iter().enumerate() {
-        let (w, _) = ends(outgoing);
+        let (w, _) = unlink(outgoing);
         let mut matches = 0u32;
         for (j, &incoming) in fan.iter().enumerate() {
-            matches |= u32::from(ends(incoming).1 == w) << j;
+            matches |= u32::from(unlink(incoming).1 == w) << j;
         }
         if !matches.is_power_of_two() || image & matches != 0 {
             return None;

@@ -535,7 +535,7 @@ impl<I: Index> Links<I> {
 
     /// The links from `v`'s first on, to the end.
     #[inline]
-    fn from(&self, v: usize) -> &[u64] {
+    fn onward(&self, v: usize) -> &[u64] {
         &self.links[self.offsets[v].to_usize()..]
     }
 }
@@ -602,7 +602,8 @@ fn fan_pass<I: Index>(links: &Links<I>) -> FanSums {
                 if fan.is_empty() {
                     continue;
                 }
-                if fan.len() > SMALL_FAN || !closed_fan(links.from(v), fan.len(), vertex, &mut sums)
+                if fan.len() > SMALL_FAN
+                    || !closed_fan(links.onward(v), fan.len(), vertex, &mut sums)
                 {
                     general_fan(fan, vertex, scratch, &mut sums);
                 }

@@ -643,38 +643,45 @@ fn scatter<I: Counts>(
         let at = offset.to_usize();
         links[at..at + held.len()].copy_from_slice(held);
     }
-    let place = |slots: &[AtomicU64], part: &mut Part<I>| {
-        let range = part.triangles.clone();
-        for (local, tri) in locals[range.clone()].iter().zip(&view.triangles[range]) {
-            if local[0] == INVALID {
-                continue;
-            }
-            for corner in 0..3 {
-                let cursor = &mut part.counts[local[corner] as usize];
-                let at = cursor.to_usize();
-                // Relaxed: the parts write disjoint slots, and rayon's join orders the writes
-                // before the reads of the fan pass. A plain store on the targets we know.
-                slots[at].store(
-                    link(tri[NEXT[corner]], tri[PREV[corner]]),
-                    Ordering::Relaxed,
-                );
-                *cursor = I::from_usize(at + 1);
-            }
-        }
-    };
     match as_atomic(&mut links) {
-        Some(slots) => parts.par_iter_mut().for_each(|part| place(slots, part)),
-        None => {
-            // Not aligned for atomics (a platform where u64 is less aligned): one pass.
-            let slots: Vec<AtomicU64> = links.iter().map(|&l| AtomicU64::new(l)).collect();
-            parts.iter_mut().for_each(|part| place(&slots, part));
-            links = slots.into_iter().map(AtomicU64::into_inner).collect();
-        }
+        // Relaxed: the parts write disjoint slots, and the end of the parallel loop orders the
+        // writes before the fan pass reads them. A plain store on the targets we know.
+        Some(slots) => parts.par_iter_mut().for_each(|part| {
+            place(locals, view.triangles, part, |at, link| {
+                slots[at].store(link, Ordering::Relaxed)
+            });
+        }),
+        // Not aligned for atomics (a platform where u64 is less aligned): one thread.
+        None => parts
+            .iter_mut()
+            .for_each(|part| place(locals, view.triangles, part, |at, link| links[at] = link)),
     }
     for part in parts {
         I::give(&mut scratch.counts, part.counts);
     }
     (offsets, links)
+}
+
+/// Places the corners of `part`'s triangles with `store(slot, link)`, advancing its cursors.
+/// Generic in `store` so that the store inlines into the loop.
+fn place<I: Index>(
+    locals: &[[u32; 3]],
+    triangles: &[[u32; 3]],
+    part: &mut Part<I>,
+    mut store: impl FnMut(usize, u64),
+) {
+    let range = part.triangles.clone();
+    for (local, tri) in locals[range.clone()].iter().zip(&triangles[range]) {
+        if local[0] == INVALID {
+            continue;
+        }
+        for corner in 0..3 {
+            let cursor = &mut part.counts[local[corner] as usize];
+            let at = cursor.to_usize();
+            store(at, link(tri[NEXT[corner]], tri[PREV[corner]]));
+            *cursor = I::from_usize(at + 1);
+        }
+    }
 }
 
 /// `links` as atomics, so the parts of the scatter can fill disjoint slots of it from several
