@@ -172,6 +172,11 @@ impl Cache {
         self.store.begin(key)
     }
 
+    /// Starts writing a self-verifying entry for `key` (see [`LocalStore::begin_self_verified`]).
+    pub fn begin_self_verified(&self, key: &Key) -> Result<PendingEntry, CacheError> {
+        self.store.begin_self_verified(key)
+    }
+
     /// Opens `key`'s entry for reads at offsets, its header checked but not its hash; see
     /// [`EntryReader`].
     pub fn open_entry(&self, key: &Key) -> Result<Opened, CacheError> {

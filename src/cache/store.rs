@@ -8,10 +8,10 @@
 //!
 //! | bytes  | content                                   |
 //! |--------|-------------------------------------------|
-//! | 0..4   | magic `LBC1`                              |
+//! | 0..4   | magic: `LBC1`, or `LBS1` for a self-verifying entry (below) |
 //! | 4..8   | format version, u32 LE ([`FORMAT_VERSION`]) |
 //! | 8..16  | payload length, u64 LE                    |
-//! | 16..48 | blake3 of the payload                     |
+//! | 16..48 | blake3 of the payload (`LBC1`), or the hash its writer declared (`LBS1`) |
 //!
 //! Invariants: an entry is whole or absent — it is written to a temporary file and renamed into
 //! place, and `get` checks magic, length and hash, so a torn, truncated or bit-flipped entry is
@@ -24,6 +24,12 @@
 //! offsets. The whole-payload hash is then not checked: a reader of parts must verify what it
 //! reads by hashes of its own (the chunked mesh payload keeps one per section), and report a
 //! mismatch so the entry is removed and rebuilt.
+//!
+//! A payload that carries such hashes need not be hashed whole as well: an entry begun with
+//! [`LocalStore::begin_self_verified`] is not hashed as written, and its header (`LBS1`) holds
+//! the hash its writer declares on commit — the chunked mesh's hash of its trailer, which
+//! holds every section's hash. Its reader must check that the declared hash is its payload's
+//! (`EntryReader::self_verified`); `get` cannot, and reports such an entry as corrupt.
 
 use std::collections::HashSet;
 use std::fmt;
@@ -39,6 +45,8 @@ use crate::deferred_free::{DEFER_BYTES, Deferred};
 use crate::direct_file::DirectFile;
 
 const MAGIC: [u8; 4] = *b"LBC1";
+/// The magic of a self-verifying entry (see the module docs).
+const SELF_VERIFIED_MAGIC: [u8; 4] = *b"LBS1";
 /// Bump when the header layout changes; older entries then read as corrupt and are rebuilt.
 pub const FORMAT_VERSION: u32 = 1;
 const HEADER_LEN: usize = 48;
@@ -110,6 +118,8 @@ pub enum Corruption {
     TooLarge { len: u64 },
     #[error("entry payload does not match its hash")]
     HashMismatch,
+    #[error("a self-verifying entry cannot be read whole")]
+    SelfVerified,
 }
 
 /// A store in a local directory. Holds no open files, so it is cheap, `Send` and `Sync`.
@@ -121,6 +131,8 @@ pub struct LocalStore {
 struct Header {
     payload_len: u64,
     hash: ContentHash,
+    /// `LBS1`: `hash` was declared by the writer, not computed over the payload.
+    self_verified: bool,
 }
 
 enum ReadFailure {
@@ -221,10 +233,18 @@ impl LocalStore {
         Ok(PendingEntry {
             temp,
             writer,
-            hasher: blake3::Hasher::new(),
+            hasher: Some(blake3::Hasher::new()),
             len: 0,
             destination,
         })
+    }
+
+    /// Starts writing a self-verifying entry for `key` (see the module docs): nothing is
+    /// hashed as it is written, and [`PendingEntry::commit_declared`] records the hash.
+    pub fn begin_self_verified(&self, key: &Key) -> Result<PendingEntry, CacheError> {
+        let mut pending = self.begin(key)?;
+        pending.hasher = None;
+        Ok(pending)
     }
 
     /// Opens the entry for `key` for reads at offsets, after checking its header and length
@@ -245,6 +265,7 @@ impl LocalStore {
                 file,
                 len: header.payload_len,
                 hash: header.hash,
+                self_verified: header.self_verified,
             })),
             Err(ReadFailure::Corrupt(reason)) => {
                 drop(file);
@@ -257,13 +278,15 @@ impl LocalStore {
     }
 }
 
-/// An entry being written. Bytes written to it are the payload, hashed as they pass; `commit`
-/// writes the header and renames the file into place. Dropping it uncommitted (an error, a
-/// failed stage) removes the temporary file, so the entry stays whole or absent.
+/// An entry being written. Bytes written to it are the payload, hashed as they pass (unless it
+/// is self-verifying); `commit` writes the header and renames the file into place. Dropping it
+/// uncommitted (an error, a failed stage) removes the temporary file, so the entry stays whole
+/// or absent.
 pub struct PendingEntry {
     temp: TempFile,
     writer: DirectFile,
-    hasher: blake3::Hasher,
+    /// `None` for a self-verifying entry.
+    hasher: Option<blake3::Hasher>,
     len: u64,
     destination: PathBuf,
 }
@@ -271,14 +294,18 @@ pub struct PendingEntry {
 impl Write for PendingEntry {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
         let n = self.writer.write(buf)?;
-        self.hasher.update(&buf[..n]);
+        if let Some(hasher) = &mut self.hasher {
+            hasher.update(&buf[..n]);
+        }
         self.len += n as u64;
         Ok(n)
     }
 
     fn write_all(&mut self, buf: &[u8]) -> io::Result<()> {
         self.writer.write_all(buf)?;
-        self.hasher.update(buf);
+        if let Some(hasher) = &mut self.hasher {
+            hasher.update(buf);
+        }
         self.len += buf.len() as u64;
         Ok(())
     }
@@ -299,18 +326,45 @@ impl PendingEntry {
     }
 
     /// Fixes up the header and renames the entry into place; returns the payload's hash, the
-    /// same [`ContentHash::of`] the whole payload would have.
-    pub fn commit(self) -> Result<ContentHash, CacheError> {
+    /// same [`ContentHash::of`] the whole payload would have. A self-verifying entry cannot
+    /// be committed this way (it has no hash of its payload): use `commit_declared`.
+    pub fn commit(mut self) -> Result<ContentHash, CacheError> {
+        match self.hasher.take() {
+            Some(hasher) => {
+                let hash = ContentHash::from_bytes(*hasher.finalize().as_bytes());
+                self.seal(MAGIC, hash)
+            }
+            None => Err(CacheError::io(
+                "commit",
+                self.temp.path(),
+                io::Error::other("a self-verifying entry needs its declared hash"),
+            )),
+        }
+    }
+
+    /// Commits a self-verifying entry under the hash its writer declares for the payload.
+    /// Returns that hash.
+    pub fn commit_declared(mut self, hash: ContentHash) -> Result<ContentHash, CacheError> {
+        match self.hasher.take() {
+            None => self.seal(SELF_VERIFIED_MAGIC, hash),
+            Some(_) => Err(CacheError::io(
+                "commit",
+                self.temp.path(),
+                io::Error::other("an entry hashed as written cannot take a declared hash"),
+            )),
+        }
+    }
+
+    fn seal(self, magic: [u8; 4], hash: ContentHash) -> Result<ContentHash, CacheError> {
         let PendingEntry {
             temp,
             writer,
-            hasher,
             len,
             destination,
+            ..
         } = self;
-        let hash = ContentHash::from_bytes(*hasher.finalize().as_bytes());
         let mut header = [0u8; HEADER_LEN];
-        header[0..4].copy_from_slice(&MAGIC);
+        header[0..4].copy_from_slice(&magic);
         header[4..8].copy_from_slice(&FORMAT_VERSION.to_le_bytes());
         header[8..16].copy_from_slice(&len.to_le_bytes());
         header[16..48].copy_from_slice(hash.as_bytes());
@@ -341,6 +395,7 @@ pub struct EntryReader {
     file: File,
     len: u64,
     hash: ContentHash,
+    self_verified: bool,
 }
 
 impl EntryReader {
@@ -356,6 +411,12 @@ impl EntryReader {
     /// The payload hash the header records (not verified: see the module docs).
     pub fn hash(&self) -> ContentHash {
         self.hash
+    }
+
+    /// Whether the entry is self-verifying: [`EntryReader::hash`] is what its writer declared,
+    /// which its reader must check against the payload.
+    pub fn self_verified(&self) -> bool {
+        self.self_verified
     }
 
     /// Fills `buf` from the payload at `offset`. Reading past the payload is `UnexpectedEof`.
@@ -484,9 +545,11 @@ fn read_header(file: &mut File, file_len: u64) -> Result<Header, ReadFailure> {
         .into(),
         _ => ReadFailure::Io("read", e),
     })?;
-    if header[0..4] != MAGIC {
-        return Err(Corruption::BadMagic.into());
-    }
+    let self_verified = match field(&header, 0) {
+        MAGIC => false,
+        SELF_VERIFIED_MAGIC => true,
+        _ => return Err(Corruption::BadMagic.into()),
+    };
     let version = u32::from_le_bytes(field(&header, 4));
     if version != FORMAT_VERSION {
         return Err(Corruption::UnknownFormat { found: version }.into());
@@ -509,7 +572,11 @@ fn read_header(file: &mut File, file_len: u64) -> Result<Header, ReadFailure> {
         }
         .into());
     }
-    Ok(Header { payload_len, hash })
+    Ok(Header {
+        payload_len,
+        hash,
+        self_verified,
+    })
 }
 
 /// `N` bytes of the header starting at `at`; the offsets are the constants of the layout table.
@@ -524,6 +591,9 @@ fn field<const N: usize>(header: &[u8; HEADER_LEN], at: usize) -> [u8; N] {
 /// make us allocate more than the file holds.
 fn read_entry(file: &mut File, file_len: u64) -> Result<(Vec<u8>, ContentHash), ReadFailure> {
     let header = read_header(file, file_len)?;
+    if header.self_verified {
+        return Err(Corruption::SelfVerified.into());
+    }
     let len = usize::try_from(header.payload_len).map_err(|_| Corruption::TooLarge {
         len: header.payload_len,
     })?;

@@ -337,3 +337,52 @@ fn opening_a_truncated_entry_is_corrupt_and_removes_it() {
         crate::cache::Opened::Miss
     ));
 }
+
+#[test]
+fn a_self_verified_entry_keeps_its_declared_hash_and_is_never_read_whole() {
+    let (_dir, store) = store();
+    let data = payload(5 << 20, 9);
+    let declared = ContentHash::of(b"what the payload's own trailer hashes to");
+    let mut pending = store.begin_self_verified(&key(1)).unwrap();
+    std::io::Write::write_all(&mut pending, &data).unwrap();
+    assert_eq!(pending.commit_declared(declared).unwrap(), declared);
+    assert_eq!(store.peek_hash(&key(1)), Some(declared));
+
+    let crate::cache::Opened::Entry(reader) = store.open(&key(1)).unwrap() else {
+        panic!("expected an entry");
+    };
+    assert!(reader.self_verified());
+    assert_eq!((reader.len(), reader.hash()), (data.len() as u64, declared));
+    let mut buf = vec![0u8; 4096];
+    reader.read_at(4 << 20, &mut buf).unwrap();
+    assert_eq!(buf, data[4 << 20..(4 << 20) + 4096]);
+    drop(reader);
+    // `get` cannot check a declared hash, so it never serves the payload as verified.
+    assert_eq!(
+        expect_corrupt(store.get(&key(1)).unwrap()),
+        Corruption::SelfVerified
+    );
+
+    // An ordinary entry is not self-verified, and the two commits do not mix.
+    store.put(&key(2), &data).unwrap();
+    let crate::cache::Opened::Entry(reader) = store.open(&key(2)).unwrap() else {
+        panic!("expected an entry");
+    };
+    assert!(!reader.self_verified());
+    assert!(
+        store
+            .begin(&key(3))
+            .unwrap()
+            .commit_declared(declared)
+            .is_err()
+    );
+    assert!(
+        store
+            .begin_self_verified(&key(4))
+            .unwrap()
+            .commit()
+            .is_err()
+    );
+    assert!(matches!(store.get(&key(3)).unwrap(), Lookup::Miss));
+    assert!(matches!(store.get(&key(4)).unwrap(), Lookup::Miss));
+}

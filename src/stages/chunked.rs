@@ -20,6 +20,10 @@
 //!   add up), and every section by its own blake3 as it is read. Any failure is
 //!   [`CorruptChunks`] (an `InvalidData` I/O error), which the builder treats as a missing
 //!   entry: the tile node runs again.
+//! - The trailer's blake3 (the `check`) identifies the payload: the trailer holds every
+//!   section's hash, offset and count, so equal checks mean equal bytes. The builder stores the
+//!   payload as a self-verifying cache entry under this hash, rather than hashing the
+//!   gigabyte again whole; [`ChunkedMesh::open`] checks that a declared hash is the check.
 
 use std::fmt;
 use std::io::{self, Write};
@@ -180,8 +184,9 @@ impl<W: Write> ChunkedWriter<W> {
         Ok(())
     }
 
-    /// Writes the trailer and returns the writer and the trailer.
-    pub fn finish(mut self, head: ChunkedHead) -> io::Result<(W, ChunkedTrailer)> {
+    /// Writes the trailer; returns the writer, the trailer and the payload's identifying hash
+    /// (the trailer's blake3: see the module docs).
+    pub fn finish(mut self, head: ChunkedHead) -> io::Result<(W, ChunkedTrailer, ContentHash)> {
         let trailer = ChunkedTrailer {
             head,
             vertices: self.vertices,
@@ -189,11 +194,11 @@ impl<W: Write> ChunkedWriter<W> {
             chunks: self.chunks,
         };
         let json = serde_json::to_vec(&trailer).map_err(io::Error::other)?;
+        let check = ContentHash::of_serial(&json);
         self.out.write_all(&json)?;
-        self.out
-            .write_all(ContentHash::of_serial(&json).as_bytes())?;
+        self.out.write_all(check.as_bytes())?;
         self.out.write_all(&(json.len() as u64).to_le_bytes())?;
-        Ok((self.out, trailer))
+        Ok((self.out, trailer, check))
     }
 }
 
@@ -201,6 +206,11 @@ impl<W: Write> ChunkedWriter<W> {
 pub trait ReadAt: Sync + Send {
     fn payload_len(&self) -> u64;
     fn read_at(&self, offset: u64, buf: &mut [u8]) -> io::Result<()>;
+    /// The hash the payload's store declared for it without computing it (a self-verifying
+    /// cache entry's), which the payload must then prove; `None` when the store verified it.
+    fn declared_hash(&self) -> Option<ContentHash> {
+        None
+    }
 }
 
 impl ReadAt for EntryReader {
@@ -210,6 +220,10 @@ impl ReadAt for EntryReader {
 
     fn read_at(&self, offset: u64, buf: &mut [u8]) -> io::Result<()> {
         EntryReader::read_at(self, offset, buf)
+    }
+
+    fn declared_hash(&self) -> Option<ContentHash> {
+        self.self_verified().then(|| self.hash())
     }
 }
 
@@ -285,8 +299,15 @@ impl<R: ReadAt> ChunkedMesh<R> {
             .ok_or_else(|| corrupt("trailer length"))?;
         let mut json = vec![0u8; json_len as usize];
         read(trailer_at, &mut json)?;
-        if ContentHash::of(&json).as_bytes() != hash {
+        let check = ContentHash::of(&json);
+        if check.as_bytes() != hash {
             return Err(corrupt("trailer does not match its hash"));
+        }
+        if source
+            .declared_hash()
+            .is_some_and(|declared| declared != check)
+        {
+            return Err(corrupt("the entry's declared hash is not its trailer's"));
         }
         let trailer: ChunkedTrailer =
             serde_json::from_slice(&json).map_err(|e| corrupt(format!("trailer: {e}")))?;
@@ -463,6 +484,45 @@ mod tests {
             write_chunked(&read, format, Encoding::Binary, &mut streamed).expect("chunked");
             assert!(whole == streamed, "{format:?}");
         }
+    }
+
+    /// A payload whose store declares a hash for it, as a self-verifying cache entry does.
+    struct Declared(Vec<u8>, ContentHash);
+
+    impl ReadAt for Declared {
+        fn payload_len(&self) -> u64 {
+            self.0.payload_len()
+        }
+        fn read_at(&self, offset: u64, buf: &mut [u8]) -> io::Result<()> {
+            self.0.read_at(offset, buf)
+        }
+        fn declared_hash(&self) -> Option<ContentHash> {
+            Some(self.1)
+        }
+    }
+
+    #[test]
+    fn the_identifying_hash_is_the_trailers_and_a_wrong_declared_one_is_corrupt() {
+        let mesh = mesh();
+        let chunks = MeshChunk::split(&mesh, 37);
+        let mut writer = ChunkedWriter::new(Vec::new()).expect("memory");
+        for chunk in &chunks {
+            writer.push(chunk).expect("memory");
+        }
+        let head = ChunkedHead {
+            summary: summary(),
+            tiling: None,
+        };
+        let (bytes, trailer, check) = writer.finish(head).expect("memory");
+        let json = serde_json::to_vec(&trailer).expect("json");
+        assert_eq!(check, ContentHash::of_serial(&json));
+        assert_eq!(&bytes[bytes.len() - 40..bytes.len() - 8], check.as_bytes());
+
+        let opened = ChunkedMesh::open(Declared(bytes.clone(), check)).expect("declared right");
+        assert_eq!(opened.trailer, trailer);
+        let wrong = ContentHash::of(&bytes);
+        let e = ChunkedMesh::open(Declared(bytes, wrong)).expect_err("declared wrong");
+        assert!(is_corrupt(&e), "{e}");
     }
 
     #[test]
