@@ -10,6 +10,8 @@
 //!   points per direction.
 //! - Simplex rules are collapsed (Duffy) tensor Gauss–Legendre rules, all points inside.
 
+use rayon::prelude::*;
+
 use super::{ElementKind, Scaffold};
 
 /// A quadrature rule on a reference element: points ξ and weights.
@@ -216,9 +218,20 @@ impl Scaffold {
 
     /// Volume (3D) or area (2D) of the whole mesh by Gauss quadrature.
     pub fn measure(&self) -> f64 {
+        // Summed by fixed blocks of elements, then the block sums in order: in parallel (it
+        // ran alone after a 100k-element tiling, a twentieth of a second on one core), yet
+        // the same bits whatever the thread count.
+        const BLOCK: usize = 4096;
         let rule = self.measure_rule();
-        (0..self.element_count())
-            .map(|e| self.element_measure(e, &rule))
-            .sum()
+        let n = self.element_count();
+        let block_sums: Vec<f64> = (0..n.div_ceil(BLOCK))
+            .into_par_iter()
+            .map(|b| {
+                (b * BLOCK..n.min((b + 1) * BLOCK))
+                    .map(|e| self.element_measure(e, &rule))
+                    .sum()
+            })
+            .collect();
+        block_sums.iter().sum()
     }
 }
