@@ -35,9 +35,15 @@
 //! constant-inside field gives the tetrahedron itself up to `f32` rounding.
 //!
 //! NaN samples of `Φ` count as outside, as in the contourer (the clip never hides them).
+//!
+//! A shell over the cube is a band of the field clipped by the box alone, so
+//! [`contour_cube_band`] contours it with the two-level contourer (a wall between two samples
+//! is kept). Over the tetrahedron the clip is a third surface the band cannot combine with:
+//! a shell there is `|f − c| − w/2` through [`contour_clipped`], which can lose walls thinner
+//! than a sample spacing.
 
-use crate::contour::{ContourError, contour};
-use crate::field::{Grid, PlaneSampler, ScalarField};
+use crate::contour::{BandMesh, ContourError, contour, contour_band};
+use crate::field::{Band, Grid, PlaneSampler, ScalarField};
 use crate::mesh::Mesh;
 use std::ops::Range;
 
@@ -159,6 +165,27 @@ pub fn contour_clipped(
             Ok(mesh)
         }
     }
+}
+
+/// The band `lo < f < hi` of `field` (a shell) over the cube `[-½, ½]³`, `samples` per axis:
+/// the grid [`contour_clipped`] uses for the cube, whose box clips exactly.
+pub fn contour_cube_band(
+    field: &dyn ScalarField,
+    band: Band,
+    samples: usize,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<BandMesh, ContourError> {
+    if samples < 2 {
+        return Err(ContourError::TooFewSamples([samples; 3]));
+    }
+    if (samples as u64).saturating_mul(samples as u64) > MAX_PLANE_SAMPLES {
+        return Err(ContourError::TooManyVertices(
+            (samples as u64).saturating_mul(samples as u64),
+        ));
+    }
+    let (min, max) = Element3::Cube.bbox();
+    let grid = Grid::spanning(min, max, [samples; 3]);
+    contour_band(field.sampler(&grid).as_ref(), band, &grid, progress)
 }
 
 /// The affine map from lattice coordinates `(u, v, w)` to the tetrahedron:

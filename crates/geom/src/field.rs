@@ -7,7 +7,10 @@
 //!   bit-identical values, whichever thread makes them. Contouring relies on this to let two
 //!   chunks evaluate their shared plane independently and still agree on every sign.
 //! - Fields never see model units or solids: [`SolidSampler`] turns a field into the implicit
-//!   function of a solid (negative inside) on the same grid.
+//!   function of a solid (negative inside) on the same grid. A shell sampled that way,
+//!   `|f| − w/2`, loses every wall that passes between two samples (both are positive), so
+//!   the box contourer takes a shell as its [`Band`] of `f` instead; the implicit function
+//!   remains for the contourers that combine it with other solids (a part, an element's clip).
 
 use std::ops::Range;
 
@@ -139,7 +142,28 @@ pub enum Solid {
     EccentricShell { offset: f64, thickness: f64 },
 }
 
+/// The solid between two levels of a field, `lo < f < hi` (a shell), contoured from `f`
+/// itself (see `contour::contour_band`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Band {
+    pub lo: f64,
+    pub hi: f64,
+}
+
 impl Solid {
+    /// For a shell, the band of field values it spans; `None` for one-sided solids.
+    pub fn band(&self) -> Option<Band> {
+        let (middle, thickness) = match *self {
+            Solid::Shell { thickness } => (0.0, thickness),
+            Solid::EccentricShell { offset, thickness } => (offset, thickness),
+            Solid::Inside { .. } | Solid::Outside { .. } => return None,
+        };
+        Some(Band {
+            lo: middle - 0.5 * thickness,
+            hi: middle + 0.5 * thickness,
+        })
+    }
+
     /// The implicit function of the solid (negative inside) from the field value.
     #[inline]
     pub fn apply(&self, f: f64) -> f64 {

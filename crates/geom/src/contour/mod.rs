@@ -15,15 +15,29 @@
 //! - Determinism: chunk boundaries depend only on the grid, chunks are assembled in order and
 //!   samples are pure functions of their plane, so the mesh is bit-identical whatever the
 //!   number of threads.
-//! - Vertices are never closer than 1/256 of an edge to a sample point, so no two vertices
-//!   share a position even where the field is exactly zero at a sample.
+//! - Vertices are never closer than 1/256 of an edge to a sample point, nor (in a band) to
+//!   the other level's crossing on the same edge, so no two vertices share a position even
+//!   where the field is exactly zero at a sample.
+//!
+//! Shells ([`contour_band`]). A shell `|f − c| ≤ w/2` sampled as one implicit function
+//! `|f − c| − w/2` vanishes wherever its wall passes between two samples: `f − c` changes
+//! sign there, but the sampled function is positive at both ends. So a shell is contoured as
+//! the band `lo < f < hi` of `f` itself, each sample being below, between or above, and each
+//! level's crossings interpolated linearly in `f` (both can lie on one edge); its volume then
+//! converges like a level set's, at any wall the grid can place two crossings across. Why a
+//! three-state marching cubes rather than contouring `{f ≤ hi}` and `{f ≥ lo}` separately and
+//! combining them: the two levels never meet inside a cube, so the one-level tables serve
+//! both (see [`table`]); only the caps on the box need a band table (the between part of a
+//! face, which the combination would have had to compute as a 2D difference of two caps),
+//! and one pass keeps one vertex numbering, the chunking, the seam rule and the determinism
+//! as they are.
 
 mod chunk;
 pub mod table;
 
 use rayon::prelude::*;
 
-use crate::field::{Grid, PlaneSampler};
+use crate::field::{Band, Grid, PlaneSampler};
 use crate::mesh::Mesh;
 use chunk::{ChunkContext, ChunkMesh, FOREIGN};
 
@@ -54,6 +68,110 @@ pub fn contour(
     model: &Grid,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<Mesh, ContourError> {
+    Ok(run(sampler, None, model, progress)?.0)
+}
+
+/// A band's mesh, and what the contourer saw of its wall.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BandMesh {
+    pub mesh: Mesh,
+    /// The largest `|∇f|` in field units per sample step, over the cubes the band's middle
+    /// level crosses (each cube's forward differences, averaged per axis); 0 if it crosses
+    /// none. The wall there is about `(hi − lo) / steepest` sample spacings thick.
+    pub steepest: f64,
+}
+
+impl BandMesh {
+    /// The thinnest wall the samples saw, in sample spacings: the band's width over
+    /// [`BandMesh::steepest`]. `None` when the middle level crosses no cube (or `f` is flat).
+    pub fn thinnest_wall(&self, band: Band) -> Option<f64> {
+        BandMesh::wall(band, self.steepest)
+    }
+
+    /// The wall of `band` where `f` is as steep as `steepest` (per sample step), in sample
+    /// spacings; `None` for a flat or uncrossed field.
+    pub fn wall(band: Band, steepest: f64) -> Option<f64> {
+        (steepest > 0.0).then(|| (band.hi - band.lo) / steepest)
+    }
+}
+
+/// Contours the band `lo < f < hi` of the field `f` sampled by `sampler` on `model`: a shell
+/// (module docs). The mesh is closed, manifold and outward as [`contour`]'s, capped on the
+/// box; an empty band (`lo ≥ hi`, or NaN) gives an empty mesh.
+pub fn contour_band(
+    sampler: &dyn PlaneSampler,
+    band: Band,
+    model: &Grid,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<BandMesh, ContourError> {
+    // The three states need `hi` above `lo`: at or above `hi` must imply above `lo`.
+    if band.lo.partial_cmp(&band.hi) != Some(std::cmp::Ordering::Less) {
+        check_grids(sampler, model)?;
+        return Ok(BandMesh {
+            mesh: Mesh::default(),
+            steepest: 0.0,
+        });
+    }
+    let (mesh, steepest_squared) = run(sampler, Some(band), model, progress)?;
+    Ok(BandMesh {
+        mesh,
+        steepest: steepest_squared.sqrt(),
+    })
+}
+
+/// [`BandMesh::steepest`] without contouring: the largest `|∇f|` per sample step over the
+/// cubes where `f` crosses `level`, for shells another contourer draws (a shell confined to a
+/// part). The same cubes and the same estimate as [`contour_band`]'s for a band about `level`;
+/// a maximum, so the same for any number of threads.
+pub fn steepest_at_level(sampler: &dyn PlaneSampler, level: f64) -> f64 {
+    let [nx, ny, nz] = sampler.grid().counts;
+    if nx < 2 || ny < 2 || nz < 2 {
+        return 0.0;
+    }
+    let cube_layers = nz - 1;
+    let per_chunk = layers_per_chunk(cube_layers);
+    let ranges: Vec<(usize, usize)> = (0..cube_layers)
+        .step_by(per_chunk)
+        .map(|k0| (k0, (k0 + per_chunk).min(cube_layers)))
+        .collect();
+    ranges
+        .par_iter()
+        .map(|&(k0, k1)| {
+            let (mut lower, mut upper) = (vec![0.0; nx * ny], vec![0.0; nx * ny]);
+            sampler.sample_plane(k0, &mut lower);
+            let mut steepest_squared = 0.0f64;
+            for k in k0..k1 {
+                sampler.sample_plane(k + 1, &mut upper);
+                for j in 0..ny - 1 {
+                    for i in 0..nx - 1 {
+                        let (a, b) = (j * nx + i, (j + 1) * nx + i);
+                        let v = [
+                            lower[a],
+                            lower[a + 1],
+                            lower[b],
+                            lower[b + 1],
+                            upper[a],
+                            upper[a + 1],
+                            upper[b],
+                            upper[b + 1],
+                        ];
+                        // Crossed: some corner above the level, some not (NaN is not above).
+                        let above = v.iter().filter(|&&x| x > level).count();
+                        if above == 0 || above == 8 {
+                            continue;
+                        }
+                        steepest_squared = steepest_squared.max(chunk::corner_gradient_squared(&v));
+                    }
+                }
+                std::mem::swap(&mut lower, &mut upper);
+            }
+            steepest_squared
+        })
+        .reduce(|| 0.0, f64::max)
+        .sqrt()
+}
+
+fn check_grids(sampler: &dyn PlaneSampler, model: &Grid) -> Result<(), ContourError> {
     let counts = model.counts;
     if counts.iter().any(|&n| n < 2) {
         return Err(ContourError::TooFewSamples(counts));
@@ -64,10 +182,23 @@ pub fn contour(
             model: counts,
         });
     }
+    Ok(())
+}
+
+/// Contours the chunks in parallel and assembles them; also the band's steepest `|∇f|²`.
+fn run(
+    sampler: &dyn PlaneSampler,
+    band: Option<Band>,
+    model: &Grid,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<(Mesh, f64), ContourError> {
+    check_grids(sampler, model)?;
+    let counts = model.counts;
     let ctx = ChunkContext {
         sampler,
         model,
         tables: table::tables(),
+        band,
     };
     let cube_layers = counts[2] - 1;
     let per_chunk = layers_per_chunk(cube_layers);
@@ -82,7 +213,12 @@ pub fn contour(
             |scratch, &(k0, k1)| ctx.run(k0, k1, scratch, progress),
         )
         .collect();
-    assemble(chunks)
+    // A maximum is exact in any order: the same whatever the number of threads.
+    let steepest_squared = chunks
+        .iter()
+        .map(|c| c.steepest_squared)
+        .fold(0.0, f64::max);
+    Ok((assemble(chunks)?, steepest_squared))
 }
 
 /// Concatenates chunk meshes in order, turning local and foreign ids into global ones.

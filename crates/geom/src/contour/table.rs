@@ -26,6 +26,19 @@
 //! Caps: for a cube face on the domain boundary, `caps` holds the inside part of the face
 //! (inside corners and crossing points, with the same face rule), counter-clockwise seen from
 //! outside, so the caps close the solid exactly along the surface's boundary.
+//!
+//! Bands (shells, `lo < f < hi`): each corner is below, between or above, given as two
+//! configurations `p` (corners above `lo`) and `q ⊆ p` (corners at or above `hi`). The band's
+//! surface is that of `p` on the lower level's crossings (slots `0..12`, normals towards the
+//! corners below) plus that of `q`, reversed, on the upper level's crossings (slots
+//! `HI_SLOT + e`, normals towards the corners above): no new surface table is needed, because
+//! the two levels never meet inside a cube, so every loop belongs to one level. Both levels
+//! use the same face rule in terms of `f` (on an ambiguous face the corners with the larger
+//! `f` are cut off one by one), which keeps their segments on a face nested instead of
+//! crossing. The band's cap on a face is the face's between part: its boundary runs along the
+//! face's sides (between corners and crossings) and along the two levels' segments; all its
+//! vertices lie on the square's perimeter in order, so each of its loops is a convex polygon
+//! and a fan triangulates it.
 
 use std::sync::OnceLock;
 
@@ -52,12 +65,21 @@ pub const EDGE_CORNERS: [[u8; 2]; 12] = {
 /// First slot index of the corner slots.
 pub const CORNER_SLOT: u8 = 12;
 
+/// First slot index of the upper level's edge slots in a band: slot `HI_SLOT + e` is the
+/// crossing of the upper level on edge `e` (slot `e` being the lower level's).
+pub const HI_SLOT: u8 = 20;
+
 /// The tables: per configuration, the surface triangles; per configuration and face, the cap.
 pub struct Tables {
     tri_start: Vec<u32>,
     tri_slots: Vec<[u8; 3]>,
     cap_start: Vec<u32>,
     cap_slots: Vec<[u8; 3]>,
+    /// Per face, its corners counter-clockwise seen from outside (the band caps' index order).
+    face_corners: [[u8; 4]; 6],
+    /// Band caps per face and per (`p`, `q`) restricted to the face's corners, 256 per face.
+    band_cap_start: Vec<u32>,
+    band_cap_slots: Vec<[u8; 3]>,
 }
 
 impl Tables {
@@ -74,6 +96,23 @@ impl Tables {
         let c = config as usize * 6 + face;
         &self.cap_slots[self.cap_start[c] as usize..self.cap_start[c + 1] as usize]
     }
+
+    /// Cap triangles of a band on face `face`, for the corners above the lower level `p` and
+    /// those at or above the upper level `q` (`q ⊆ p`), counter-clockwise seen from outside.
+    #[inline]
+    pub fn band_cap(&self, p: u8, q: u8, face: usize) -> &[[u8; 3]] {
+        let c = face * 256 + face_index(&self.face_corners[face], p, q);
+        &self.band_cap_slots[self.band_cap_start[c] as usize..self.band_cap_start[c + 1] as usize]
+    }
+}
+
+/// The 8-bit index of a face's corner states: bit `k` from `p`, bit `4 + k` from `q`, for the
+/// face's `k`-th corner.
+#[inline]
+fn face_index(corners: &[u8; 4], p: u8, q: u8) -> usize {
+    corners.iter().enumerate().fold(0, |index, (k, &c)| {
+        index | usize::from((p >> c) & 1) << k | usize::from((q >> c) & 1) << (k + 4)
+    })
 }
 
 /// The tables, built once per process.
@@ -236,6 +275,100 @@ fn face_cap(face: &Face, config: u8) -> Vec<[u8; 3]> {
         .collect()
 }
 
+/// Where a point of a face's perimeter is, walking it counter-clockwise, relative to a band.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Walk {
+    /// A corner between the levels.
+    Corner,
+    /// A crossing where the walk enters the band.
+    Enter,
+    /// A crossing where the walk leaves it.
+    Exit,
+}
+
+/// The between part of one face for a band (module docs), as triangles of slots,
+/// counter-clockwise seen from outside. `p`/`q`: corners above the lower level / at or above
+/// the upper one (`q ⊆ p`).
+fn band_face_cap(face: &Face, p: u8, q: u8) -> Vec<[u8; 3]> {
+    // 0 below, 1 between, 2 above.
+    let state = |k: usize| {
+        let c = face.corners[k];
+        u8::from(p & (1 << c) != 0) + u8::from(q & (1 << c) != 0)
+    };
+    let mut walk: Vec<(u8, Walk)> = Vec::new();
+    for k in 0..4 {
+        let (from, to) = (state(k), state((k + 1) % 4));
+        if from == 1 {
+            walk.push((CORNER_SLOT + face.corners[k], Walk::Corner));
+        }
+        let (lo, hi) = (face.edges[k], HI_SLOT + face.edges[k]);
+        match (from, to) {
+            (0, 1) => walk.push((lo, Walk::Enter)),
+            (1, 0) => walk.push((lo, Walk::Exit)),
+            (2, 1) => walk.push((hi, Walk::Enter)),
+            (1, 2) => walk.push((hi, Walk::Exit)),
+            // Both levels on one side: the band is the stretch between the two crossings.
+            (0, 2) => walk.extend([(lo, Walk::Enter), (hi, Walk::Exit)]),
+            (2, 0) => walk.extend([(hi, Walk::Enter), (lo, Walk::Exit)]),
+            _ => {}
+        }
+    }
+    if walk.iter().all(|&(_, w)| w == Walk::Corner) {
+        // No crossing: the whole face is in the band (four corners) or none of it.
+        return if walk.len() == 4 {
+            let s: Vec<u8> = walk.iter().map(|&(s, _)| s).collect();
+            vec![[s[0], s[1], s[2]], [s[0], s[2], s[3]]]
+        } else {
+            Vec::new()
+        };
+    }
+    // Each crossing's partner across the face: the other end of its level's segment.
+    let mut partner = [u8::MAX; 32];
+    for (a, b) in face_segments(face, p) {
+        (partner[a as usize], partner[b as usize]) = (b, a);
+    }
+    for (a, b) in face_segments(face, q) {
+        let (a, b) = (HI_SLOT + a, HI_SLOT + b);
+        (partner[a as usize], partner[b as usize]) = (b, a);
+    }
+    let at = |slot: u8| {
+        walk.iter()
+            .position(|&(s, _)| s == slot)
+            .expect("a segment ends on the perimeter walk")
+    };
+    let n = walk.len();
+    let mut used = vec![false; n];
+    let mut out = Vec::new();
+    for start in 0..n {
+        if walk[start].1 != Walk::Enter || used[start] {
+            continue;
+        }
+        // Along the perimeter to the next exit, then across the face to the entry that
+        // exit's segment leads to, until back at the start.
+        let mut polygon = Vec::new();
+        let mut i = start;
+        loop {
+            used[i] = true;
+            polygon.push(walk[i].0);
+            if walk[i].1 == Walk::Exit {
+                i = at(partner[walk[i].0 as usize]);
+                assert!(
+                    walk[i].1 == Walk::Enter,
+                    "a segment joins an exit to an entry"
+                );
+                if i == start {
+                    break;
+                }
+            } else {
+                i = (i + 1) % n;
+            }
+        }
+        // Points of a convex perimeter in its order: a convex polygon (module docs).
+        out.extend((1..polygon.len() - 1).map(|k| [polygon[0], polygon[k], polygon[k + 1]]));
+    }
+    out
+}
+
 /// Triangulates one loop of edge slots, avoiding diagonals between vertices on a common face.
 fn triangulate_loop(lp: &[u8], edge_faces: &[[usize; 2]; 12]) -> Vec<[u8; 3]> {
     let n = lp.len();
@@ -303,6 +436,9 @@ fn build() -> Tables {
         tri_slots: Vec::new(),
         cap_start: vec![0],
         cap_slots: Vec::new(),
+        face_corners: std::array::from_fn(|f| faces[f].corners),
+        band_cap_start: vec![0],
+        band_cap_slots: Vec::new(),
     };
     for config in 0..=255u8 {
         let mut next = [u8::MAX; 12];
@@ -331,6 +467,25 @@ fn build() -> Tables {
         for face in &faces {
             tables.cap_slots.extend(face_cap(face, config));
             tables.cap_start.push(tables.cap_slots.len() as u32);
+        }
+    }
+    for face in &faces {
+        for index in 0..256usize {
+            let (p4, q4) = (index & 15, index >> 4);
+            // Only q ⊆ p is a band configuration; other indices stay empty.
+            if q4 & !p4 == 0 {
+                let spread = |bits: usize| {
+                    (0..4)
+                        .filter(|&k| bits & (1 << k) != 0)
+                        .fold(0u8, |c, k| c | 1 << face.corners[k])
+                };
+                tables
+                    .band_cap_slots
+                    .extend(band_face_cap(face, spread(p4), spread(q4)));
+            }
+            tables
+                .band_cap_start
+                .push(tables.band_cap_slots.len() as u32);
         }
     }
     tables
@@ -416,6 +571,76 @@ mod tests {
             .map(|tri| dot(pos(tri[0]), cross(pos(tri[1]), pos(tri[2]))) / 6.0)
             .sum();
         assert!((v1 - 1.0 / 48.0).abs() < 1e-15);
+    }
+
+    /// Every band configuration (`q ⊆ p`): the lower level's surface, the upper level's
+    /// reversed and the band caps on all six faces form a closed, consistently oriented surface
+    /// with positive volume, the crossings placed a third of the way from the outer corner.
+    #[test]
+    fn band_surfaces_plus_caps_are_closed_and_enclose_positive_volume() {
+        let t = tables();
+        let mut checked = 0;
+        for p in 0..=255u8 {
+            for q in (0..=255u8).filter(|&q| q & !p == 0) {
+                let state = |c: u8| u8::from(p & (1 << c) != 0) + u8::from(q & (1 << c) != 0);
+                let pos = |s: u8| -> P3 {
+                    if (CORNER_SLOT..HI_SLOT).contains(&s) {
+                        return corner_pos(s - CORNER_SLOT);
+                    }
+                    let (e, upper) = if s >= HI_SLOT {
+                        (s - HI_SLOT, true)
+                    } else {
+                        (s, false)
+                    };
+                    let [a, b] = EDGE_CORNERS[e as usize];
+                    // From the corner beyond this level, a third of the way along.
+                    let outer_is_a = if upper { state(a) == 2 } else { state(a) == 0 };
+                    let (from, to) = if outer_is_a { (a, b) } else { (b, a) };
+                    let (pf, pt) = (corner_pos(from), corner_pos(to));
+                    std::array::from_fn(|k| pf[k] + (pt[k] - pf[k]) / 3.0)
+                };
+                let tris: Vec<[u8; 3]> = t
+                    .triangles(p)
+                    .iter()
+                    .copied()
+                    .chain(
+                        t.triangles(q)
+                            .iter()
+                            .map(|s| [HI_SLOT + s[0], HI_SLOT + s[2], HI_SLOT + s[1]]),
+                    )
+                    .chain((0..6).flat_map(|f| t.band_cap(p, q, f).iter().copied()))
+                    .collect();
+                let mut directed: HashMap<(u8, u8), i32> = HashMap::new();
+                for tri in &tris {
+                    for k in 0..3 {
+                        *directed.entry((tri[k], tri[(k + 1) % 3])).or_default() += 1;
+                    }
+                }
+                for (&(a, b), &count) in &directed {
+                    assert_eq!(count, 1, "p {p} q {q}: edge {a}->{b} used {count} times");
+                    assert_eq!(
+                        directed.get(&(b, a)),
+                        Some(&1),
+                        "p {p} q {q}: {a}->{b} open"
+                    );
+                }
+                let volume: f64 = tris
+                    .iter()
+                    .map(|tri| dot(pos(tri[0]), cross(pos(tri[1]), pos(tri[2]))) / 6.0)
+                    .sum();
+                let empty = (p == 0) || (q == 255);
+                if empty {
+                    assert!(tris.is_empty(), "p {p} q {q}: nothing between the levels");
+                } else {
+                    assert!(volume > 0.0, "p {p} q {q}: volume {volume}");
+                    checked += 1;
+                }
+                if p == 255 && q == 0 {
+                    assert!((volume - 1.0).abs() < 1e-15, "the whole cube: {volume}");
+                }
+            }
+        }
+        assert_eq!(checked, 6561 - 2);
     }
 
     #[test]
