@@ -331,6 +331,9 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
             .map_err(|e| Failure::Build(format!("cannot write `{}`: {e}", path.display())))?;
         if !args.quiet {
             eprintln!("{}", report.summary_line());
+            for line in report.warning_lines() {
+                eprintln!("{line}");
+            }
         }
         reports.push(report);
     }

@@ -1,11 +1,13 @@
 //! Per-output reports: `out/NAME.report.json`, the `--report` JSON array, and the one-line
-//! summary on stderr. Every number comes from our validator run on the mesh that was written.
+//! summary on stderr. Every number comes from our validator run on the mesh that was written,
+//! except a shell's thinnest wall, which the contourer measured on its samples. Warnings
+//! (`warnings` in the JSON) are also printed on stderr, one `warning:` line each.
 
 use serde::Serialize;
 
 use crate::build::OutputResult;
 use crate::manifest::Manifest;
-use crate::stages::TilingSummary;
+use crate::stages::{ShellSummary, TilingSummary};
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Bbox {
@@ -41,6 +43,14 @@ pub struct Report {
     /// fraction is over the scaffold's volume).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tiling: Option<TilingSummary>,
+    /// For a shell contoured over a box: its thinnest wall in sample spacings (see
+    /// [`ShellSummary::thinnest_wall`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub thinnest_wall: Option<f64>,
+    /// What the build found worth saying about this output (a wall thinner than
+    /// [`ShellSummary::THIN_WALL`] sample spacings).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
     pub bbox: Bbox,
     pub files: Vec<String>,
     pub stages: Vec<StageReport>,
@@ -78,6 +88,14 @@ impl Report {
             planar: result.written.planar_element_area.is_some(),
             sdf_box: result.written.domain.map(|[min, max]| Bbox { min, max }),
             tiling: result.written.tiling.clone(),
+            thinnest_wall: result.written.shell.as_ref().and_then(|s| s.thinnest_wall),
+            warnings: result
+                .written
+                .shell
+                .as_ref()
+                .and_then(ShellSummary::warning)
+                .into_iter()
+                .collect(),
             bbox: Bbox {
                 min: s.bbox_min,
                 max: s.bbox_max,
@@ -98,6 +116,14 @@ impl Report {
                 })
                 .collect(),
         }
+    }
+
+    /// The warning lines for stderr, `warning: NAME: …` each.
+    pub fn warning_lines(&self) -> Vec<String> {
+        self.warnings
+            .iter()
+            .map(|w| format!("warning: {}: {w}", self.name))
+            .collect()
     }
 
     /// The one-line human summary.

@@ -1,6 +1,6 @@
 //! Golden cases, one driver for all (see `tests/golden/README.md`):
 //! - `ok/NNNN_name/lattice.toml` must build without diagnostics; a normalized summary of every
-//!   output (counts, validity, bbox, volume and area at fixed precision) must equal
+//!   output (counts, validity, bbox, volume and area at fixed precision, warnings) must equal
 //!   `summary.txt`.
 //! - `err/NNNN_name/lattice.toml` must fail with exit code 2 and print exactly `expected.txt`.
 //!
@@ -92,6 +92,19 @@ fn summarize(report: &serde_json::Value) -> String {
         vec3(&report["bbox"]["min"]),
         vec3(&report["bbox"]["max"]),
     ) + &tiling(report)
+        + &warnings(report)
+}
+
+/// A line per warning of the report (a thin shell wall), with the wall it measured.
+fn warnings(report: &serde_json::Value) -> String {
+    let Some(warnings) = report["warnings"].as_array() else {
+        return String::new();
+    };
+    let wall = report["thinnest_wall"].as_f64().expect("a warned wall");
+    warnings
+        .iter()
+        .map(|w| format!("  warning (wall {wall:.4}) {}\n", w.as_str().expect("text")))
+        .collect()
 }
 
 /// The tiling line of a tiled output's report (nothing for other outputs).

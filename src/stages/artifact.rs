@@ -68,6 +68,57 @@ pub struct MeshArtifact {
     pub domain: Option<[[f64; 3]; 2]>,
     /// What a tiling found (`None` but for tiled outputs).
     pub tiling: Option<TilingSummary>,
+    /// What the contourer saw of a shell's wall (`None` but for shells it measured).
+    pub shell: Option<ShellSummary>,
+}
+
+/// A shell's wall as its samples saw it, for the report's thin-wall warning.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ShellSummary {
+    /// The shell's width in field values.
+    pub thickness: f64,
+    /// The thinnest wall in sample spacings: `thickness / |∇f|`, with `|∇f|` per sample step
+    /// at its largest over the grid cubes the shell's middle level crosses (forward
+    /// differences averaged per axis); `None` when that level crosses no cube.
+    pub thinnest_wall: Option<f64>,
+    /// The samples per axis it was contoured with (for the advice on how many would do).
+    pub samples: [usize; 3],
+    /// Contoured from the sampled `|f − c| − w/2` (a shell confined to a part), not as the
+    /// band between two levels: a wall between two samples is then lost, not just coarse.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub sampled: bool,
+}
+
+impl ShellSummary {
+    /// Walls thinner than this many sample spacings are warned about: below it a wall is
+    /// crossed by few grid edges, so its volume and shape are only roughly resolved (and a
+    /// sampler that did not contour the two levels separately would lose it entirely).
+    pub const THIN_WALL: f64 = 2.0;
+
+    /// The warning for a wall thinner than [`ShellSummary::THIN_WALL`] sample spacings, with
+    /// the samples per axis that would make it that thick.
+    pub fn warning(&self) -> Option<String> {
+        let wall = self.thinnest_wall.filter(|&w| w < Self::THIN_WALL)?;
+        let factor = Self::THIN_WALL / wall;
+        let more: Vec<String> = self
+            .samples
+            .iter()
+            .map(|&n| (((n - 1) as f64 * factor).ceil() as u64 + 1).to_string())
+            .collect();
+        let effect = if self.sampled {
+            "poorly resolved, and confined to a part the thinner ones can vanish"
+        } else {
+            "poorly resolved"
+        };
+        Some(format!(
+            "the thinnest shell wall is about {wall:.2} sample spacings (thickness {} over the \
+             steepest field gradient); walls under {} spacings are {effect}: use about {} \
+             samples, or a larger thickness",
+            self.thickness,
+            Self::THIN_WALL,
+            more.join(" × ")
+        ))
+    }
 }
 
 /// What the `tile` stage reports besides the mesh: the scaffold's elements and faces (edges,
@@ -112,6 +163,8 @@ struct MeshHead {
     domain: Option<[[f64; 3]; 2]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     tiling: Option<TilingSummary>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    shell: Option<ShellSummary>,
 }
 
 impl MeshArtifact {
@@ -123,6 +176,7 @@ impl MeshArtifact {
             planar: self.planar.clone(),
             domain: self.domain,
             tiling: self.tiling.clone(),
+            shell: self.shell.clone(),
         };
         let summary = serde_json::to_vec(&head).expect("summary serializes");
         let mut head = Vec::with_capacity(32 + summary.len());
@@ -173,6 +227,7 @@ impl MeshArtifact {
             planar,
             domain,
             tiling,
+            shell,
         } = serde_json::from_slice(&payload[32..summary_end]).map_err(|e| bad(&e.to_string()))?;
         let vertices = bytemuck::pod_collect_to_vec(&payload[summary_end..vertices_end]);
         let triangles = bytemuck::pod_collect_to_vec(&payload[vertices_end..end]);
@@ -185,6 +240,7 @@ impl MeshArtifact {
             planar,
             domain,
             tiling,
+            shell,
         })
     }
 }
@@ -214,4 +270,7 @@ pub struct WrittenOutput {
     /// For a tiled output, what the tiling found (see [`MeshArtifact::tiling`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tiling: Option<TilingSummary>,
+    /// For a shell, its wall (see [`MeshArtifact::shell`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shell: Option<ShellSummary>,
 }

@@ -1,23 +1,32 @@
 //! The `contour` stage: samples a cell's formula over an output's domain and contours the
 //! solid into a checked, watertight mesh.
+//!
+//! Shells over a box are contoured as the band between their two levels of the field (see
+//! `contour::contour_band`: a wall between two samples is kept), and the thinnest wall the
+//! samples saw goes into the payload for the report's warning; so are shells over the cube
+//! element. Shells confined to a part (`within`), clipped to the tetrahedron or drawn as
+//! planar regions are still contoured from `|f − c| − w/2` (combined with the clip), which can
+//! lose walls thinner than a sample spacing: the two-level contourer does not combine with a
+//! third surface, and the planar contourer has no two-level variant.
 
-use latticebuild_geom::contour::contour;
+use latticebuild_geom::contour::{BandMesh, contour, contour_band, steepest_at_level};
 use latticebuild_geom::contour2d::{Element2, PlanarRegion, contour_planar, contour_planar_box};
-use latticebuild_geom::element::{Element3, contour_clipped};
-use latticebuild_geom::field::{Grid, ScalarField, Solid, SolidField, SolidSampler};
+use latticebuild_geom::element::{Element3, contour_clipped, contour_cube_band};
+use latticebuild_geom::field::{Band, Grid, ScalarField, Solid, SolidField, SolidSampler};
 use latticebuild_geom::mesh::Mesh;
 use latticebuild_geom::symmetric::{Group, ReferenceElement};
 use latticebuild_geom::validate;
 use latticebuild_geom::within::WithinSampler;
 
-use super::artifact::{MeshArtifact, MeshSummary, Planar};
+use super::artifact::{MeshArtifact, MeshSummary, Planar, ShellSummary};
 use super::mesh::part_sdf;
 use super::symmetric::{FittedPayload, group_of};
 use crate::build::StageProgress;
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::{GroupSpec, Output, Symmetric};
 
-pub const VERSION: u32 = 2;
+/// 3: shells contoured as bands of the field, with their wall in the payload.
+pub const VERSION: u32 = 3;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct ContourStage {
@@ -111,12 +120,13 @@ impl ContourStage {
             }
         };
         progress.phase("contouring");
+        let mut shell = None;
         let (mesh, planar) = if self.over_element {
             let group = match &self.fitted {
                 Some(spec) => group_of(spec)?,
                 None => return Err("`over = \"element\"` needs a cell with a symmetry".into()),
             };
-            self.contour_element(&*field, &group, progress)?
+            self.contour_element(&*field, &group, progress, &mut shell)?
         } else if self.planar_domain {
             self.contour_planar_domain(&*field)?
         } else {
@@ -127,11 +137,19 @@ impl ContourStage {
                 solid: self.solid,
             };
             let advance = |n: usize| progress.advance(n);
-            let mesh = match (&self.within, part) {
-                (Some(given), Some(bytes)) => {
+            let mesh = match (&self.within, part, self.solid.band()) {
+                (Some(given), Some(bytes), _) => {
                     progress.phase("preparing the part");
                     let band = WithinSampler::band_for(&model, self.skin);
                     let sdf = part_sdf(given, bytes, band)?;
+                    if let Some(band) = self.solid.band() {
+                        // Contoured from |f − c| − w/2 below: its wall is measured on f apart.
+                        progress.phase("measuring the shell's wall");
+                        let f = field.sampler(&cell_grid);
+                        let middle = band.lo + 0.5 * (band.hi - band.lo);
+                        let steepest = steepest_at_level(f.as_ref(), middle);
+                        shell = Some(self.shell_summary(band, steepest, self.samples, true));
+                    }
                     progress.phase("contouring");
                     let sampler = WithinSampler {
                         lattice: Box::new(lattice),
@@ -140,6 +158,12 @@ impl ContourStage {
                         skin: self.skin,
                     };
                     contour(&sampler, &model, &advance)
+                }
+                (_, _, Some(band)) => {
+                    let contoured = contour_band(lattice.inner.as_ref(), band, &model, &advance)
+                        .map_err(|e| e.to_string())?;
+                    shell = Some(self.shell_summary(band, contoured.steepest, self.samples, false));
+                    Ok(contoured.mesh)
                 }
                 _ => contour(&lattice, &model, &advance),
             }
@@ -154,7 +178,30 @@ impl ContourStage {
             planar,
             domain: None,
             tiling: None,
+            shell,
         })
+    }
+
+    /// What the report says of a shell's wall: `steepest` is the largest `|∇f|` per sample
+    /// step where the band's middle level crosses the grid (`BandMesh::steepest`); `sampled`
+    /// when the shell was contoured from `|f − c| − w/2`.
+    fn shell_summary(
+        &self,
+        band: Band,
+        steepest: f64,
+        samples: [usize; 3],
+        sampled: bool,
+    ) -> ShellSummary {
+        let thickness = match self.solid {
+            Solid::Shell { thickness } | Solid::EccentricShell { thickness, .. } => thickness,
+            Solid::Inside { .. } | Solid::Outside { .. } => band.hi - band.lo,
+        };
+        ShellSummary {
+            thickness,
+            thinnest_wall: BandMesh::wall(band, steepest),
+            samples,
+            sampled,
+        }
     }
 
     /// The region `Φ ≤ 0` of a 2D cell repeated over the rectangle of the domain (model units;
@@ -191,6 +238,7 @@ impl ContourStage {
         field: &dyn ScalarField,
         group: &Group,
         progress: &dyn StageProgress,
+        shell: &mut Option<ShellSummary>,
     ) -> Result<(Mesh, Option<Planar>), String> {
         let samples = self.samples[0].max(self.samples[1]);
         let solid = SolidField {
@@ -208,11 +256,21 @@ impl ContourStage {
         };
         let advance = |n: usize| progress.advance(n);
         match group.reference_element() {
-            Some(ReferenceElement::Cube) => Ok((
-                contour_clipped(&solid, Element3::Cube, samples, &advance)
-                    .map_err(|e| e.to_string())?,
-                None,
-            )),
+            // A shell over the cube: the band of the field, clipped by the box alone.
+            Some(ReferenceElement::Cube) => match self.solid.band() {
+                Some(band) => {
+                    let contoured = contour_cube_band(field, band, samples, &advance)
+                        .map_err(|e| e.to_string())?;
+                    *shell =
+                        Some(self.shell_summary(band, contoured.steepest, [samples; 3], false));
+                    Ok((contoured.mesh, None))
+                }
+                None => Ok((
+                    contour_clipped(&solid, Element3::Cube, samples, &advance)
+                        .map_err(|e| e.to_string())?,
+                    None,
+                )),
+            },
             Some(ReferenceElement::Tetrahedron) => Ok((
                 contour_clipped(&solid, Element3::Tetrahedron, samples, &advance)
                     .map_err(|e| e.to_string())?,

@@ -37,7 +37,9 @@ pub mod write;
 use crate::cache::{ContentHash, Key, KeyBuilder, KeyDescription, KeyError};
 use crate::manifest::{Cell, Output};
 
-pub use artifact::{MeshArtifact, MeshSummary, TilingSummary, WrittenFile, WrittenOutput};
+pub use artifact::{
+    MeshArtifact, MeshSummary, ShellSummary, TilingSummary, WrittenFile, WrittenOutput,
+};
 pub use write::{OutputSink, PendingFile, Prewritten};
 
 /// One node's computation, with its parameters.

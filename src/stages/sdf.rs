@@ -184,6 +184,7 @@ impl SdfStage {
             planar: None,
             domain: Some([contoured.domain.min, contoured.domain.max]),
             tiling: None,
+            shell: None,
         })
     }
 }

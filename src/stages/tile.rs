@@ -62,6 +62,8 @@ const CHUNK_TRIANGLES: usize = 500_000;
 
 /// What the stage made: a whole mesh (2D tilings), or the head of a mesh whose chunks went to
 /// the `chunks` callback of [`TileStage::run`].
+// One value per stage run, moved once: its size does not matter.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug)]
 pub enum TileOutput {
     Whole(MeshArtifact),
@@ -399,6 +401,7 @@ impl TileStage {
         progress.phase("checking the mesh");
         let summary = MeshSummary::from_check(&validate::check(&mesh));
         Ok(MeshArtifact {
+            shell: None,
             mesh,
             summary,
             planar,

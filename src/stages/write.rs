@@ -162,6 +162,7 @@ impl WriteStage {
                     planar_element_area: None,
                     domain: None,
                     tiling: head.tiling.clone(),
+                    shell: None,
                 });
             }
         };
@@ -198,6 +199,7 @@ impl WriteStage {
             planar_element_area: artifact.planar.as_ref().map(|p| p.element_area),
             domain: artifact.domain,
             tiling: artifact.tiling.clone(),
+            shell: artifact.shell.clone(),
         })
     }
 }
