@@ -122,6 +122,10 @@ pub struct BuildArgs {
     /// Also write the reports as one JSON array to FILE (`-` for stdout)
     #[arg(long, value_name = "FILE")]
     pub report: Option<String>,
+    /// Succeed even when an output's mesh is not watertight or not manifold (the files and
+    /// reports are written either way; the report lists the defects)
+    #[arg(long)]
+    pub allow_defects: bool,
 }
 
 /// Why a build did not succeed, with its exit code.
@@ -351,6 +355,19 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
     let mut freed = sink.take_replaced();
     freed.extend(cache.take_collected());
     crate::deferred_free::free_detached(freed);
+    let defective: Vec<String> = reports
+        .iter()
+        .filter(|r| !r.defects.is_empty())
+        .map(|r| format!("`{}`: {}", r.name, r.defects.join("; ")))
+        .collect();
+    if !defective.is_empty() && !args.allow_defects {
+        return Err(Failure::Build(format!(
+            "{} output(s) failed the mesh check (written and reported, but not usable as \
+             solids; `--allow-defects` accepts them):\n  {}",
+            defective.len(),
+            defective.join("\n  ")
+        )));
+    }
     Ok(())
 }
 
