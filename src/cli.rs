@@ -299,6 +299,7 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
         return Err(Failure::Usage(text));
     }
     let cache = open_cache(&manifest.path, args.quiet)?;
+    sweep_outputs(&manifest, args.verbose > 0);
     let sink = OutputDir::new(manifest.out_dir.clone());
     let bars;
     let progress: &dyn Progress = if !args.quiet && std::io::stderr().is_terminal() {
@@ -382,9 +383,22 @@ fn run_graph(args: &ManifestArgs) -> Result<(), Failure> {
     Ok(())
 }
 
+/// Removes the temporary files that killed builds left among the outputs.
+fn sweep_outputs(manifest: &Manifest, verbose: bool) {
+    for path in crate::files::sweep_stale_temporaries(&manifest::output_dirs(manifest)) {
+        if verbose {
+            eprintln!(
+                "  removed `{}`, left by an interrupted build",
+                path.display()
+            );
+        }
+    }
+}
+
 fn run_clean(args: &ManifestArgs) -> Result<(), Failure> {
     let manifest = load_manifest(args)?;
     let mut cache = open_cache(&manifest.path, false)?;
+    sweep_outputs(&manifest, false);
     cache.clean().map_err(|e| Failure::Build(e.to_string()))?;
     eprintln!("removed the cache of `{}`", manifest.path.display());
     Ok(())

@@ -14,6 +14,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::deferred_free::Deferred;
 use crate::direct_file::DirectFile;
+use crate::interrupt::Temporary;
 use crate::stages::{OutputSink, PendingFile, WrittenFile};
 
 /// Writes output files under one directory. The big files they replace are freed later
@@ -41,7 +42,7 @@ impl OutputDir {
 /// name, so the rename only drops a name, and its data is freed through `replaced`: deleting
 /// gigabytes waits for the disk (0.4 s for a 2.2 GB STL on a `discard` mount).
 fn replace(temp: &Path, path: &Path, replaced: &Deferred) -> io::Result<()> {
-    let old = temporary_beside(path)?;
+    let (old, _registered) = temporary_beside(path)?;
     // Fails when there is no old file (or no hard links here): then there is nothing to free.
     let kept = fs::hard_link(path, &old).is_ok();
     let renamed = fs::rename(temp, path);
@@ -81,8 +82,68 @@ pub fn modified_ns(path: &Path) -> Option<u64> {
     u64::try_from(since.as_nanos()).ok()
 }
 
-/// A fresh temporary name beside `path` (whose directory is created).
-fn temporary_beside(path: &Path) -> io::Result<PathBuf> {
+/// Between an output's name and the writer's pid in a temporary name:
+/// `.NAME.EXT.tmp-PID-COUNTER`.
+const TEMP_INFIX: &str = ".tmp-";
+
+/// The pid in a temporary output name, if `name` is one.
+fn temporary_owner(name: &str) -> Option<u32> {
+    let rest = name.strip_prefix('.')?;
+    let (_, tail) = rest.rsplit_once(TEMP_INFIX)?;
+    let (pid, counter) = tail.split_once('-')?;
+    counter.parse::<u64>().ok()?;
+    pid.parse().ok()
+}
+
+/// Whether process `pid` is running (on this machine). Where that cannot be told, it is
+/// assumed to be, so a file that might still be written is never removed.
+fn process_alive(pid: u32) -> bool {
+    #[cfg(unix)]
+    {
+        let Ok(pid) = libc::pid_t::try_from(pid) else {
+            return true;
+        };
+        // SAFETY: signal 0 performs only the existence and permission check.
+        let rc = unsafe { libc::kill(pid, 0) };
+        rc == 0 || io::Error::last_os_error().raw_os_error() != Some(libc::ESRCH)
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = pid;
+        true
+    }
+}
+
+/// Removes the temporary output files in `dirs` left by processes that are gone (a build
+/// killed with `kill -9`, or a crash): an interrupted build removes its own, but nothing can
+/// run after SIGKILL. Returns the files removed. Another live build's files are kept, even
+/// one of another manifest sharing the directory.
+pub fn sweep_stale_temporaries(dirs: &[PathBuf]) -> Vec<PathBuf> {
+    let mut removed = Vec::new();
+    for dir in dirs {
+        let Ok(entries) = fs::read_dir(dir) else {
+            continue;
+        };
+        for entry in entries.flatten() {
+            let name = entry.file_name();
+            let Some(pid) = name.to_str().and_then(temporary_owner) else {
+                continue;
+            };
+            let is_file = entry.file_type().is_ok_and(|t| t.is_file());
+            if is_file && pid != std::process::id() && !process_alive(pid) {
+                let path = entry.path();
+                if fs::remove_file(&path).is_ok() {
+                    removed.push(path);
+                }
+            }
+        }
+    }
+    removed
+}
+
+/// A fresh temporary name beside `path` (whose directory is created), registered for removal
+/// should the process be interrupted while the returned entry lives.
+fn temporary_beside(path: &Path) -> io::Result<(PathBuf, Temporary)> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
     let dir = path
         .parent()
@@ -93,11 +154,13 @@ fn temporary_beside(path: &Path) -> io::Result<PathBuf> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    Ok(dir.join(format!(
-        ".{name}.tmp-{}-{}",
+    let temp = dir.join(format!(
+        ".{name}{TEMP_INFIX}{}-{}",
         std::process::id(),
         COUNTER.fetch_add(1, Ordering::Relaxed)
-    )))
+    ));
+    let registered = Temporary::register(&temp);
+    Ok((temp, registered))
 }
 
 /// Writes `path` atomically from `fill`: a temporary file beside it, renamed on success and
@@ -115,7 +178,7 @@ fn write_replacing(
     fill: &mut dyn FnMut(&mut dyn Write) -> io::Result<()>,
     replaced: Option<&Deferred>,
 ) -> io::Result<u64> {
-    let temp = temporary_beside(path)?;
+    let (temp, _registered) = temporary_beside(path)?;
     let result = (|| {
         let file = File::create(&temp)?;
         let mut writer = CountingWriter {
@@ -151,11 +214,12 @@ impl OutputSink for OutputDir {
 
     fn begin_file(&self, relative: &str) -> io::Result<Box<dyn PendingFile>> {
         let path = self.dir.join(relative);
-        let temp = temporary_beside(&path)?;
+        let (temp, registered) = temporary_beside(&path)?;
         let file = File::create(&temp)?;
         Ok(Box::new(PendingOutput {
             writer: Some(DirectFile::new(file, &temp)),
             temp,
+            _registered: registered,
             path,
             replaced: Arc::clone(&self.replaced),
         }))
@@ -174,6 +238,8 @@ struct PendingOutput {
     /// `None` once committed.
     writer: Option<DirectFile>,
     temp: PathBuf,
+    /// Dropped after `Drop::drop` has removed an uncommitted file.
+    _registered: Temporary,
     path: PathBuf,
     replaced: Arc<Deferred>,
 }

@@ -10,6 +10,7 @@ pub mod direct_file;
 pub mod files;
 pub mod graph;
 pub mod inspect;
+pub mod interrupt;
 pub mod manifest;
 pub mod progress;
 pub mod report;

@@ -1,5 +1,10 @@
 fn main() -> std::process::ExitCode {
     keep_freed_memory();
+    // Before any thread starts: every thread must inherit the blocked signals.
+    if let Err(e) = latticebuild::interrupt::install() {
+        eprintln!("error: cannot take over Ctrl-C: {e}");
+        return std::process::ExitCode::from(1);
+    }
     latticebuild::cli::main()
 }
 

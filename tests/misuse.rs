@@ -45,3 +45,140 @@ fn a_crystal_surface_with_no_inside_fails() {
     assert!(stderr.contains("the output is empty"), "{stderr}");
     assert!(!p.out("na.stl").exists());
 }
+
+// ---- interrupted builds leave no temporary files ----------------------------------------------
+
+/// A gyroid whose text meshes take seconds to write, so a signal lands mid-write.
+const SLOW_WRITE: &str = "[cells.g]\ntpms = \"gyroid\"\n\n[outputs.big]\ncell = \"g\"\n\
+    domain = { min = [0, 0, 0], max = [4, 4, 4] }\nsamples = 200\n\
+    formats = [\"stl\", \"ply\", \"obj\"]\nascii = true\n";
+
+/// Our temporary files under `dir` (outputs' `.NAME.tmp-…` and the cache's `.tmp-…`).
+fn temporaries(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut found = Vec::new();
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return found;
+    };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            found.extend(temporaries(&path));
+        } else if entry.file_name().to_string_lossy().contains(".tmp-") {
+            found.push(path);
+        }
+    }
+    found
+}
+
+/// Starts a build of `p` and returns it once a temporary output file exists.
+fn build_until_writing(p: &Project) -> std::process::Child {
+    let mut child = std::process::Command::new(common::BIN)
+        .args(["build", "lattice.toml", "-q"])
+        .current_dir(p.path())
+        .spawn()
+        .expect("spawn build");
+    let start = std::time::Instant::now();
+    while temporaries(&p.path().join("out")).is_empty() {
+        assert!(
+            child.try_wait().expect("poll").is_none(),
+            "the build ended before writing"
+        );
+        assert!(start.elapsed().as_secs() < 60, "no temporary file appeared");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child
+}
+
+/// Waits for `child`, which must end within `seconds`.
+fn ends_within(child: &mut std::process::Child, seconds: f64) -> std::process::ExitStatus {
+    let start = std::time::Instant::now();
+    loop {
+        if let Some(status) = child.try_wait().expect("poll") {
+            return status;
+        }
+        assert!(
+            start.elapsed().as_secs_f64() < seconds,
+            "the build did not stop within {seconds} s"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+}
+
+#[cfg(unix)]
+fn send(child: &std::process::Child, signal: &str) {
+    let sent = std::process::Command::new("kill")
+        .args([signal, &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(sent.success());
+}
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_and_sigterm_stop_a_build_at_once_and_remove_its_temporaries() {
+    use std::os::unix::process::ExitStatusExt;
+    let p = Project::new(SLOW_WRITE);
+    for (flag, number) in [("-INT", 2), ("-TERM", 15)] {
+        let mut child = build_until_writing(&p);
+        send(&child, flag);
+        let status = ends_within(&mut child, 2.0);
+        assert_eq!(status.signal(), Some(number), "killed by the signal it got");
+        assert_eq!(temporaries(p.path()), Vec::<std::path::PathBuf>::new());
+    }
+}
+
+#[cfg(unix)]
+#[test]
+fn a_build_killed_hard_leaves_temporaries_that_the_next_build_and_clean_remove() {
+    let p = Project::new(SLOW_WRITE);
+    for next in ["build", "clean"] {
+        let mut child = build_until_writing(&p);
+        send(&child, "-KILL");
+        ends_within(&mut child, 5.0);
+        let left = temporaries(&p.path().join("out"));
+        assert!(!left.is_empty(), "SIGKILL cannot be handled");
+        // A quick build (a small grid) sweeps as it starts.
+        let args: &[&str] = match next {
+            "build" => &[
+                "build",
+                "lattice.toml",
+                "-q",
+                "--set",
+                "outputs.big.samples=8",
+            ],
+            _ => &["clean", "lattice.toml"],
+        };
+        let out = p.run(args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        for path in left {
+            assert!(!path.exists(), "`{next}` left {}", path.display());
+        }
+    }
+}
+
+#[cfg(unix)]
+#[test]
+fn a_live_builds_temporaries_are_not_swept() {
+    let p = Project::new(SLOW_WRITE);
+    // A name as another running process would have: this test's own pid.
+    std::fs::create_dir_all(p.path().join("out")).expect("mkdir");
+    let busy = p.out(&format!(".other.stl.tmp-{}-0", std::process::id()));
+    std::fs::write(&busy, b"being written").expect("write");
+    let out = p.run(&[
+        "build",
+        "lattice.toml",
+        "-q",
+        "--set",
+        "outputs.big.samples=8",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(busy.exists());
+}

@@ -30,6 +30,7 @@ mod source;
 mod tests;
 
 pub use model::*;
+pub use schema::output_files::output_dirs;
 
 use source::{Report, Sources};
 

@@ -105,3 +105,18 @@ pub(crate) fn check_collisions(
         }
     }
 }
+
+/// Every directory the outputs write into: `out_dir` and those their paths add, each once.
+pub fn output_dirs(manifest: &Manifest) -> Vec<std::path::PathBuf> {
+    let mut dirs = vec![manifest.out_dir.clone()];
+    for (_, files) in files_by_output(manifest) {
+        for file in files {
+            if let Some(parent) = std::path::Path::new(&file).parent() {
+                dirs.push(manifest.out_dir.join(parent));
+            }
+        }
+    }
+    dirs.sort();
+    dirs.dedup();
+    dirs
+}
