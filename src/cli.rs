@@ -126,6 +126,9 @@ pub struct BuildArgs {
     /// reports are written either way; the report lists the defects)
     #[arg(long)]
     pub allow_defects: bool,
+    /// Build even when the estimated memory or disk use exceeds what the machine has
+    #[arg(long)]
+    pub allow_large: bool,
 }
 
 /// Why a build did not succeed, with its exit code.
@@ -246,11 +249,19 @@ fn run_cell(args: &CellArgs) -> Result<(), Failure> {
 }
 
 fn set_jobs(jobs: Option<usize>) -> Result<(), Failure> {
-    let Some(jobs) = jobs else { return Ok(()) };
+    let Some(mut jobs) = jobs else { return Ok(()) };
     if jobs == 0 {
         return Err(Failure::Usage(
             "error: `--jobs` must be at least 1\n".into(),
         ));
+    }
+    // More threads than this only cost memory and start-up time (`-j 100000` spent a minute
+    // spawning threads): the work splits into far fewer pieces.
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let most = (4 * cores).max(64);
+    if jobs > most {
+        eprintln!("warning: `--jobs {jobs}` is more than this machine can use; using {most}");
+        jobs = most;
     }
     rayon::ThreadPoolBuilder::new()
         .num_threads(jobs)
@@ -298,6 +309,22 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
         }
         return Err(Failure::Usage(text));
     }
+    let estimates = crate::budget::estimate(&manifest, &args.targets);
+    if !args.allow_large {
+        let machine = crate::budget::Machine::probe(&manifest.out_dir);
+        let refused = crate::budget::refusals(&estimates, machine);
+        if !refused.is_empty() {
+            let mut text = String::new();
+            for why in refused {
+                text.push_str(&format!("error: {why}\n"));
+            }
+            text.push_str(
+                "  = help: lower the samples or resolution, or pass `--allow-large` to build \
+                 anyway (the figures are upper-end estimates)\n",
+            );
+            return Err(Failure::Usage(text));
+        }
+    }
     let cache = open_cache(&manifest.path, args.quiet)?;
     sweep_outputs(&manifest, args.verbose > 0);
     let sink = OutputDir::new(manifest.out_dir.clone());
@@ -327,7 +354,11 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
                 }
             }
         }
-        let report = Report::new(&manifest, result);
+        let mut report = Report::new(&manifest, result);
+        report.estimate = estimates
+            .iter()
+            .find(|(name, _)| *name == result.name)
+            .map(|(_, e)| e.clone());
         let path = manifest
             .out_dir
             .join(format!("{}.report.json", result.name));

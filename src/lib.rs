@@ -1,6 +1,7 @@
 //! latticebuild: a TOML manifest of unit cells and outputs, compiled into a DAG of cached
 //! stages that produce watertight lattice meshes. See `docs/ARCHITECTURE.md` for the map.
 
+pub mod budget;
 pub mod build;
 pub mod cache;
 pub mod cli;

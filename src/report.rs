@@ -47,6 +47,10 @@ pub struct Report {
     /// What is wrong with the mesh (not closed, not manifold); empty for a good one. A build
     /// with a defective output fails unless the user allowed defects.
     pub defects: Vec<String>,
+    /// The estimate made before the build (peak memory, bytes written, triangles), against
+    /// which it was allowed to run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub estimate: Option<crate::budget::Estimate>,
 }
 
 impl Report {
@@ -67,6 +71,7 @@ impl Report {
         let planar = result.written.planar_element_area.is_some();
         Report {
             defects: defects(s.watertight, s.manifold, planar),
+            estimate: None,
             name: result.name.clone(),
             triangles: s.triangles,
             vertices: s.vertices,

@@ -182,3 +182,74 @@ fn a_live_builds_temporaries_are_not_swept() {
     );
     assert!(busy.exists());
 }
+
+// ---- requests the machine cannot hold are refused before anything runs -----------------------
+
+const GYROID: &str = "[cells.g]\ntpms = \"gyroid\"\n\n[outputs.g]\ncell = \"g\"\n\
+    domain = { min = [0, 0, 0], max = [10, 10, 10] }\ncell_size = 5\nsamples = 40\n";
+
+#[test]
+fn samples_beyond_the_machine_are_refused_up_front_naming_the_key_and_sizes() {
+    let p = Project::new(GYROID);
+    for samples in ["100000", "35000"] {
+        let started = std::time::Instant::now();
+        let set = format!("outputs.g.samples={samples}");
+        let (code, stderr) = build(&p, &["--set", &set]);
+        assert_eq!(code, Some(2), "{stderr}");
+        assert!(
+            started.elapsed().as_secs() < 10,
+            "refused only after working"
+        );
+        assert!(stderr.contains("output `g` would need about"), "{stderr}");
+        assert!(
+            stderr.contains("of memory (`outputs.g.samples`"),
+            "{stderr}"
+        );
+        assert!(stderr.contains("is available"), "{stderr}");
+        assert!(stderr.contains("--allow-large"), "{stderr}");
+        assert!(!stderr.contains("panicked") && !stderr.contains("memory allocation"));
+    }
+    assert!(!p.path().join("out").exists(), "nothing is written");
+}
+
+#[test]
+fn a_tiling_that_would_fill_the_disk_is_refused() {
+    let p = Project::new(
+        "[cells.p]\ntpms = \"p\"\nsymmetry = \"Oh\"\n\n[scaffolds.big]\n\
+         grid = { min = [0, 0, 0], max = [215, 215, 216], divisions = [215, 215, 216], \
+         element = \"hex\" }\n\n[outputs.t]\nscaffold = \"big\"\ncell = \"p\"\nresolution = 12\n",
+    );
+    let (code, stderr) = build(&p, &[]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("TB (files and cache; `t`"), "{stderr}");
+    assert!(stderr.contains("`outputs.t.resolution`"), "{stderr}");
+    assert!(stderr.contains("free"), "{stderr}");
+}
+
+#[test]
+fn the_report_carries_the_estimate_and_it_bounds_the_real_mesh() {
+    let p = Project::new(GYROID);
+    let reports = p.build(&[]);
+    let report = &reports[0];
+    let triangles = report["triangles"].as_f64().expect("triangles");
+    let estimated = report["estimate"]["triangles"].as_f64().expect("estimate");
+    assert!(
+        (triangles..6.0 * triangles).contains(&estimated),
+        "{estimated} against {triangles}"
+    );
+    assert!(report["estimate"]["memory_bytes"].as_u64().is_some());
+    assert!(report["estimate"]["disk_bytes"].as_u64().is_some());
+}
+
+#[test]
+fn absurd_job_counts_are_capped() {
+    let p = Project::new(GYROID);
+    let started = std::time::Instant::now();
+    let (code, stderr) = build(&p, &["-j", "100000", "-q"]);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(
+        stderr.contains("warning: `--jobs 100000` is more than"),
+        "{stderr}"
+    );
+    assert!(started.elapsed().as_secs() < 20);
+}
