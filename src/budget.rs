@@ -130,18 +130,36 @@ fn sdf(name: &str, o: &crate::manifest::SdfOutput) -> Option<Estimate> {
         }
         (SdfResolution::Voxel(_), None) => return None,
     };
-    // A program's lattice scale is not known here: take four periods across the box.
+    Some(box_estimate(
+        &format!("outputs.{name}.samples"),
+        [min, max],
+        samples,
+        &o.formats,
+        o.encoding,
+    ))
+}
+
+/// An SDF program contoured over `bounds` at `samples` (the `sdf` outputs and command). A
+/// program's lattice scale is not known here: the surface is taken as a sheet with four
+/// periods across the box's smallest side.
+pub fn box_estimate(
+    key: &str,
+    [min, max]: [[f64; 3]; 2],
+    samples: [usize; 3],
+    formats: &[Format],
+    encoding: Encoding,
+) -> Estimate {
     let extent = (0..3)
         .map(|a| (max[a] - min[a]).abs())
         .fold(f64::INFINITY, f64::min);
     let density = 3.5 * 2.0 / (extent / 4.0).max(f64::MIN_POSITIVE);
     let triangles = box_triangles(min, max, samples, density);
-    Some(Estimate {
+    Estimate {
         memory_bytes: saturate(plane_bytes(samples) + triangles * MEMORY_PER_TRIANGLE),
-        disk_bytes: saturate(files_bytes(triangles, &o.formats, o.encoding)),
+        disk_bytes: saturate(files_bytes(triangles, formats, encoding)),
         triangles: saturate(triangles),
-        key: format!("outputs.{name}.samples"),
-    })
+        key: key.to_string(),
+    }
 }
 
 /// Elements of a scaffold: a grid's by its divisions, a file's by reading it (`None` when it

@@ -28,6 +28,7 @@ use latticebuild_geom::sdf::{
 };
 
 use super::Failure;
+use crate::budget;
 use crate::build::NoProgress;
 use crate::files::write_atomically;
 use crate::stages::sdf::{box_text, contour_field, mesh_field};
@@ -79,6 +80,8 @@ struct Options {
     domain: Option<Aabb>,
     output: PathBuf,
     quiet: bool,
+    /// `--allow-large`: contour even what seems too big for the machine.
+    allow_large: bool,
     words: Vec<Word>,
 }
 
@@ -93,6 +96,7 @@ impl Options {
             domain: None,
             output: PathBuf::from("out.ply"),
             quiet: false,
+            allow_large: false,
             words: Vec::new(),
         };
         let mut it = words.into_iter();
@@ -107,6 +111,10 @@ impl Options {
                 "-o" | "--output" => "-o",
                 "-q" | "--quiet" => {
                     options.quiet = true;
+                    continue;
+                }
+                "--allow-large" => {
+                    options.allow_large = true;
                     continue;
                 }
                 _ => {
@@ -168,8 +176,26 @@ fn command(args: &[String]) -> Result<(), Failure> {
     let program = Program::parse(&options.words).map_err(usage)?;
     let field = program.field(&MeshFiles).map_err(usage)?;
     let shown = options.output.display();
+    let domain = options.domain.unwrap_or_else(|| field.domain());
+    if !options.allow_large {
+        let estimate = budget::box_estimate(
+            "-s",
+            [domain.min, domain.max],
+            options.samples,
+            &[format],
+            Encoding::Binary,
+        );
+        let machine = budget::Machine::probe(options.output.parent().unwrap_or(Path::new(".")));
+        let refused = budget::refusals(&[(shown.to_string(), estimate)], machine);
+        if !refused.is_empty() {
+            return Err(usage(format_args!(
+                "{}\n  = help: fewer samples with `-s`, or `--allow-large` to contour anyway",
+                refused.join("\nerror: ")
+            )));
+        }
+    }
     let samples = |_: &Aabb| Ok(options.samples);
-    let contoured = contour_field(&field, options.domain, &samples, &NoProgress)
+    let contoured = contour_field(&field, Some(domain), &samples, &NoProgress)
         .map_err(|e| Failure::Build(format!("{e}: `{shown}` was not written")))?;
     let (mesh, check, domain) = (&contoured.mesh, &contoured.check, &contoured.domain);
     write_atomically(&options.output, &mut |w| {

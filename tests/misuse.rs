@@ -253,3 +253,15 @@ fn absurd_job_counts_are_capped() {
     );
     assert!(started.elapsed().as_secs() < 20);
 }
+
+#[test]
+fn the_sdf_command_refuses_a_grid_beyond_the_machine() {
+    let p = Project::new("");
+    let out = p.run(&["sdf", "-s", "99999,99999,3", "ball", "-o", "big.stl"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("of memory (`-s`"), "{stderr}");
+    assert!(stderr.contains("--allow-large"), "{stderr}");
+    assert!(!stderr.contains("memory allocation"), "{stderr}");
+    assert!(!p.path().join("big.stl").exists());
+}
