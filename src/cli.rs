@@ -59,7 +59,8 @@ enum Command {
                             Options, anywhere among the words: -s SAMPLES (a total like 100^3, \
                             or NX,NY,NZ; default 60^3), -b X0,Y0,Z0,X1,Y1,Z1 (default: the \
                             solid's bounds), -o FILE (default out.ply; .stl .ply .obj .off .vtk), \
-                            -q (no summary)."
+                            -q (no summary), --allow-large (contour even a grid estimated \
+                            to need more memory or disk than the machine has)."
     )]
     Sdf(SdfArgs),
     /// Reconstruct the periodic surface through a crystal's atoms (CIF or extended XYZ)
