@@ -218,7 +218,7 @@ fn run_cell(args: &CellArgs) -> Result<(), Failure> {
     let points = match &args.points {
         None => Vec::new(),
         Some(path) => {
-            let text = std::fs::read_to_string(path).map_err(|e| {
+            let text = crate::files::read_input_text(path).map_err(|e| {
                 Failure::Usage(format!("error: cannot read `{}`: {e}\n", path.display()))
             })?;
             crate::inspect::read_points(&path.display().to_string(), &text, group.dimension())
@@ -294,6 +294,7 @@ fn compile(manifest: &Manifest) -> Result<Graph, Failure> {
 /// One build: manifest to files and reports.
 pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
     let manifest = load_manifest(&args.manifest)?;
+    crate::files::check_report_path(args.report.as_deref(), &manifest).map_err(Failure::Usage)?;
     let graph = compile(&manifest)?;
     if let Err(unknown) = graph.needed(&args.targets) {
         let names: Vec<&str> = graph.outputs.keys().map(String::as_str).collect();
@@ -339,6 +340,13 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
     let results = Builder::new(&graph, &cache, &sink, progress)
         .build(&args.targets)
         .map_err(|e| Failure::Build(e.to_string()))?;
+    // The outputs are in place: what they replaced, and the cache entries gc collected, are
+    // freed by a detached helper, so the command need not wait for the disk. Handed over
+    // before anything is printed: a closed stdout or stderr ends the process at its next
+    // write (SIGPIPE, see main.rs), which would leave them under their temporary names.
+    let mut freed = sink.take_replaced();
+    freed.extend(cache.take_collected());
+    crate::deferred_free::free_detached(freed);
     let mut reports = Vec::new();
     for result in &results {
         if args.verbose > 0 {
@@ -379,15 +387,10 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
         }
         Some(file) => {
             let json = serde_json::to_string_pretty(&reports).expect("reports serialize");
-            write_atomically(Path::new(file), &mut |w| w.write_all(json.as_bytes()))
+            crate::files::write_user_file(Path::new(file), &mut |w| w.write_all(json.as_bytes()))
                 .map_err(|e| Failure::Build(format!("cannot write `{file}`: {e}")))?;
         }
     }
-    // The outputs are in place and reported: what they replaced, and the cache entries gc
-    // collected, are freed by a detached helper, so the command need not wait for the disk.
-    let mut freed = sink.take_replaced();
-    freed.extend(cache.take_collected());
-    crate::deferred_free::free_detached(freed);
     let defective: Vec<String> = reports
         .iter()
         .filter(|r| !r.defects.is_empty())

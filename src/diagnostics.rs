@@ -6,6 +6,10 @@
 //!   source text and no file system.
 //! - Rendering is plain text, deterministic and free of colour, in the style of rustc and cargo:
 //!   messages are lower case, name things in backticks and end without a period.
+//! - Nothing a file contains reaches the terminal raw: control characters (NUL, escape, a
+//!   lone carriage return…) are shown as their Unicode pictures (`␀`, `␛`, `␍`), as rustc
+//!   shows them, and invisible formatting characters (bidirectional overrides, zero-width
+//!   spaces, C1 controls) as `\u{…}`; tabs as four spaces. Carets stay under what they mark.
 //!
 //! The renderer is hand-rolled rather than taken from `annotate-snippets`: we only ever show one
 //! line with one underline, and owning the ~80 lines keeps the exact text stable (it is under
@@ -143,7 +147,7 @@ pub fn render(diags: &[Diagnostic]) -> String {
 }
 
 fn render_one(out: &mut String, diag: &Diagnostic) {
-    let _ = writeln!(out, "error: {}", diag.message);
+    let _ = writeln!(out, "error: {}", visible(&diag.message));
     // The gutter is as wide as the line number, as in rustc; one column when there is no line.
     let width = diag
         .location
@@ -151,22 +155,31 @@ fn render_one(out: &mut String, diag: &Diagnostic) {
         .map_or(1, |l| l.line.to_string().len());
     let pad = " ".repeat(width);
     if let Some(loc) = &diag.location {
-        let _ = writeln!(out, "{pad}--> {}:{}:{}", loc.file, loc.line, loc.column);
+        let file = visible(&loc.file);
+        let _ = writeln!(out, "{pad}--> {file}:{}:{}", loc.line, loc.column);
         let _ = writeln!(out, "{pad} |");
         // Built then trimmed, so an empty source line leaves no trailing space.
-        let line = format!("{} | {}", loc.line, expand_tabs(&loc.source_line));
+        let line = format!("{} | {}", loc.line, visible(&loc.source_line));
         let _ = writeln!(out, "{}", line.trim_end());
-        // Tabs are shown as four spaces, so the caret offset must count them the same way.
+        // Tabs and escapes are wider than the characters they show, so the caret offset and
+        // the underline count the shown text.
         let before: String = loc
             .source_line
             .chars()
             .take(loc.column.saturating_sub(1))
             .collect();
-        let indent = " ".repeat(expand_tabs(&before).chars().count());
-        let carets = "^".repeat(loc.underline.max(1));
+        let marked: String = loc
+            .source_line
+            .chars()
+            .skip(loc.column.saturating_sub(1))
+            .take(loc.underline)
+            .collect();
+        let indent = " ".repeat(visible(&before).chars().count());
+        let width = visible(&marked).chars().count();
+        let carets = "^".repeat(width.max(loc.underline).max(1));
         match &diag.label {
             Some(label) => {
-                let _ = writeln!(out, "{pad} | {indent}{carets} {label}");
+                let _ = writeln!(out, "{pad} | {indent}{carets} {}", visible(label));
             }
             None => {
                 let _ = writeln!(out, "{pad} | {indent}{carets}");
@@ -174,21 +187,41 @@ fn render_one(out: &mut String, diag: &Diagnostic) {
         }
     } else if let Some(label) = &diag.label {
         // Without a line to underline, the label is still worth showing.
-        let _ = writeln!(out, "{pad} = note: {label}");
+        let _ = writeln!(out, "{pad} = note: {}", visible(label));
     }
     if diag.help.is_some() || !diag.notes.is_empty() {
         let _ = writeln!(out, "{pad} |");
         for note in &diag.notes {
-            let _ = writeln!(out, "{pad} = note: {note}");
+            let _ = writeln!(out, "{pad} = note: {}", visible(note));
         }
         if let Some(help) = &diag.help {
-            let _ = writeln!(out, "{pad} = help: {help}");
+            let _ = writeln!(out, "{pad} = help: {}", visible(help));
         }
     }
 }
 
-fn expand_tabs(text: &str) -> String {
-    text.replace('\t', "    ")
+/// `text` as it may be shown on a terminal: a tab as four spaces, a control character as its
+/// picture (U+2400 + code, `␡` for DEL; one character wide, so columns keep their place), and
+/// a character that would be invisible or reorder the line (C1 controls, bidirectional
+/// controls, zero-width characters, the byte-order mark) as `\u{…}`.
+fn visible(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '\t' => out.push_str("    "),
+            '\0'..='\x1f' => out.push(char::from_u32(0x2400 + c as u32).unwrap_or('\u{fffd}')),
+            '\x7f' => out.push('\u{2421}'),
+            '\u{80}'..='\u{9f}'
+            | '\u{200b}'..='\u{200f}'
+            | '\u{2028}'..='\u{202e}'
+            | '\u{2060}'..='\u{2069}'
+            | '\u{feff}' => {
+                let _ = write!(out, "\\u{{{:x}}}", c as u32);
+            }
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 #[cfg(test)]
@@ -230,6 +263,57 @@ error: could not load `lattice.toml` due to 1 previous error
             "{out}"
         );
         assert!(out.ends_with("error: aborting due to 1 previous error\n"));
+    }
+
+    #[test]
+    fn control_characters_are_shown_as_pictures_and_carets_stay_aligned() {
+        // A NUL, an escape sequence that would recolour the terminal, a carriage return.
+        let text = "a = \"x\0y\"\nb = \"\x1b[31mred\r!\"\n";
+        let span = text.find('\0').unwrap_or(0);
+        let nul = Diagnostic::error("invalid basic string")
+            .with_location(Location::of_span("f.toml", text, span..span + 1))
+            .with_label("here");
+        let span = text.find('!').unwrap_or(0);
+        let after =
+            Diagnostic::error("m").with_location(Location::of_span("f.toml", text, span..span + 1));
+        let out = render(&[nul, after]);
+        assert!(
+            out.contains(&format!("1 | a = \"x␀y\"\n  | {}^ here\n", " ".repeat(6))),
+            "{out}"
+        );
+        assert!(
+            out.contains(&format!(
+                "2 | b = \"␛[31mred␍!\"\n  | {}^\n",
+                " ".repeat(14)
+            )),
+            "{out}"
+        );
+        assert!(!out.chars().any(|c| c.is_control() && c != '\n'), "{out:?}");
+    }
+
+    #[test]
+    fn invisible_characters_are_escaped_in_lines_and_messages() {
+        // A right-to-left override would display the rest of the line reversed.
+        let text = "k = \"\u{202e}abc\" # \u{200b}x";
+        let span = text.find('x').unwrap_or(0);
+        let diag = Diagnostic::error("unknown key `a\u{0}b`")
+            .with_location(Location::of_span("f", text, span..span + 1))
+            .with_label("label\u{7}")
+            .with_help("help\u{1b}");
+        let out = render(&[diag]);
+        assert!(out.starts_with("error: unknown key `a␀b`\n"), "{out}");
+        assert!(
+            out.contains(&format!(
+                "1 | k = \"\\u{{202e}}abc\" # \\u{{200b}}x\n  | {}^ label␇\n",
+                " ".repeat(28)
+            )),
+            "{out}"
+        );
+        assert!(out.contains("= help: help␛\n"), "{out}");
+        assert!(
+            !out.contains('\u{202e}') && !out.contains('\u{200b}'),
+            "{out:?}"
+        );
     }
 
     #[test]

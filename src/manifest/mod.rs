@@ -12,7 +12,8 @@
 //!   validation, since a recovered tree would only add errors that are not really there.
 //! - Every diagnostic cites a place (file, line, column, the line's text), computed when it is
 //!   made; overridden values are shown in their `--set` argument.
-//! - [`load`] reads the one manifest file; nothing else here does IO, and nothing does geometry.
+//! - [`load`] reads the one manifest file (a regular file of UTF-8 text) and checks that the
+//!   files it names are regular files; nothing else here does IO, and nothing does geometry.
 //! - No input makes this module panic.
 
 use std::path::Path;
@@ -34,10 +35,15 @@ pub use schema::output_files::output_dirs;
 
 use source::{Report, Sources};
 
-/// Reads and validates the manifest at `path`, with `--set` overrides applied.
+/// Reads and validates the manifest at `path`, with `--set` overrides applied. The manifest
+/// must be a regular file (`/dev/null` or a FIFO is refused before anything is made next to
+/// it) of UTF-8 text (the first byte that is not is shown at its line and column).
 pub fn load(path: &Path, overrides: &[String]) -> Result<Manifest, Vec<Diagnostic>> {
-    match std::fs::read_to_string(path) {
-        Ok(text) => {
+    match crate::files::read_input(path) {
+        Ok(bytes) => {
+            let name = path.display().to_string();
+            let text = String::from_utf8(bytes)
+                .map_err(|e| vec![source::not_utf8(&name, e.as_bytes(), e.utf8_error())])?;
             let manifest = parse(&text, path, overrides)?;
             check_input_files(&manifest, &text, path, overrides)?;
             Ok(manifest)
@@ -53,7 +59,7 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Manifest, Vec<Diagnosti
     }
 }
 
-/// Every mesh or crystal file the manifest names must be a readable file: one error per missing file,
+/// Every mesh or crystal file the manifest names must be a regular file: one error per missing file,
 /// pointing at where it is named. (Its contents are read, and checked, by the build.)
 fn check_input_files(
     manifest: &Manifest,
@@ -93,10 +99,8 @@ fn check_input_files(
                 }),
         );
     for (key, file, kind) in named {
-        let problem = match std::fs::metadata(&file.path) {
-            Ok(meta) if meta.is_file() => continue,
-            Ok(_) => "it is not a file".to_string(),
-            Err(err) => err.to_string(),
+        let Some(problem) = crate::files::input_problem(&file.path) else {
+            continue;
         };
         let diag = Diagnostic::error(format!(
             "cannot read the {kind} `{}` of `{key}`",

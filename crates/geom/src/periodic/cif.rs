@@ -219,13 +219,35 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<Crystal, CrystalError> {
         &block,
         ["a", "b", "c"].map(|a| format!("_cell_length_{a}")),
         None,
+        (|v| v > 0.0, "positive"),
     )?;
+    let angle_tags = ["alpha", "beta", "gamma"].map(|a| format!("_cell_angle_{a}"));
     let angles = cell_values(
         &reader,
         &block,
-        ["alpha", "beta", "gamma"].map(|a| format!("_cell_angle_{a}")),
+        angle_tags.clone(),
         Some(90.0),
+        (
+            |v| v > 0.0 && v < 180.0,
+            "strictly between 0 and 180 degrees",
+        ),
     )?;
+    if super::unit_volume_squared(angles) <= super::FLAT_CELL {
+        // Shown at the first angle the file gives (a cell of defaults is never flat).
+        let first = angle_tags
+            .iter()
+            .filter_map(|t| block.item(t))
+            .min_by_key(|(tag, _)| (tag.line, tag.column));
+        let [a, b, g] = angles;
+        let message = format!(
+            "the cell angles α = {a}°, β = {b}°, γ = {g}° give a cell of no volume: \
+             1 − cos²α − cos²β − cos²γ + 2 cosα cosβ cosγ must be positive"
+        );
+        return Err(match first {
+            Some((tag, _)) => reader.at(tag, message),
+            None => reader.error(block.line, 0, message),
+        });
+    }
     let operations = operations(&reader, &block)?;
     let sites = sites(&reader, &block)?;
     Ok(Crystal {
@@ -333,19 +355,24 @@ fn number(reader: &Reader<'_>, tag: &str, token: &Token) -> Result<f64, CrystalE
     }
 }
 
+/// The three values of `tags`, each passing `valid` (described by `expected`), or `default`.
 fn cell_values(
     reader: &Reader<'_>,
     block: &Block,
     tags: [String; 3],
     default: Option<f64>,
+    (valid, expected): (fn(f64) -> bool, &str),
 ) -> Result<[f64; 3], CrystalError> {
     let mut out = [0.0; 3];
     for (o, tag) in out.iter_mut().zip(&tags) {
         *o = match block.item(tag) {
             Some((_, value)) => {
                 let v = number(reader, tag, value)?;
-                if v <= 0.0 {
-                    return Err(reader.at(value, format!("`{tag}` must be positive")));
+                if !valid(v) {
+                    return Err(reader.at(
+                        value,
+                        format!("`{tag}` must be {expected}, found `{}`", value.text),
+                    ));
                 }
                 v
             }
@@ -619,5 +646,55 @@ mod tests {
         assert_eq!(c.sites[0].fract, [0.1234, 0.5, 0.25]);
         assert_eq!(c.sites[0].species, "Si");
         assert_eq!(c.operations, vec![SymOp::IDENTITY]);
+    }
+
+    /// A P1 cell with the given angle lines, and one atom.
+    fn cell_with(angles: &str) -> String {
+        format!(
+            "data_t\n_cell_length_a 5\n_cell_length_b 5\n_cell_length_c 5\n{angles}\
+             _symmetry_space_group_name_H-M 'P 1'\nloop_\n_atom_site_label\n\
+             _atom_site_fract_x\n_atom_site_fract_y\n_atom_site_fract_z\nSi1 0 0 0\n"
+        )
+    }
+
+    #[test]
+    fn cell_angles_must_lie_strictly_between_0_and_180_degrees() {
+        let e = read("t.cif", cell_with("_cell_angle_gamma 180\n").as_bytes()).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "t.cif:5:19: `_cell_angle_gamma` must be strictly between 0 and 180 degrees, \
+             found `180`"
+        );
+        let e = read("t.cif", cell_with("_cell_angle_beta 0.0(1)\n").as_bytes()).unwrap_err();
+        assert_eq!((e.line, e.column), (5, 18), "{e}");
+        let e = read("t.cif", cell_with("_cell_angle_alpha 270\n").as_bytes()).unwrap_err();
+        assert_eq!((e.line, e.column), (5, 19), "{e}");
+        let e = read("t.cif", cell_with("_cell_angle_alpha -90\n").as_bytes()).unwrap_err();
+        assert_eq!((e.line, e.column), (5, 19), "{e}");
+        let c = read("t.cif", cell_with("_cell_angle_gamma 179.9\n").as_bytes()).unwrap();
+        assert_eq!(c.angles, [90.0, 90.0, 179.9]);
+    }
+
+    #[test]
+    fn angles_no_three_edges_can_have_are_an_error_at_the_first_angle() {
+        // α + β = γ: the third edge lies in the plane of the other two (volume exactly 0).
+        let flat = "_cell_angle_alpha 60\n_cell_angle_beta 60\n_cell_angle_gamma 120\n";
+        let e = read("t.cif", cell_with(flat).as_bytes()).unwrap_err();
+        assert_eq!((e.line, e.column), (5, 1), "{e}");
+        assert!(e.message.contains("no volume"), "{e}");
+        // α + β < γ: no vectors have these angles (the volume would be imaginary).
+        let impossible = "_cell_angle_gamma 150\n_cell_angle_alpha 30\n_cell_angle_beta 30\n";
+        let e = read("t.cif", cell_with(impossible).as_bytes()).unwrap_err();
+        assert_eq!((e.line, e.column), (5, 1), "{e}");
+        assert!(
+            {
+                let c = [30f64, 30.0, 150.0].map(|d| d.to_radians().cos());
+                1.0 - c[0] * c[0] - c[1] * c[1] - c[2] * c[2] + 2.0 * c[0] * c[1] * c[2]
+            } < -0.5,
+            "an independent check that the cell is impossible"
+        );
+        // Just off flat, a real (if thin) cell: accepted.
+        let thin = "_cell_angle_alpha 60\n_cell_angle_beta 60\n_cell_angle_gamma 119.9\n";
+        assert!(read("t.cif", cell_with(thin).as_bytes()).is_ok());
     }
 }

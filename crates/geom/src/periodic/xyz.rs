@@ -104,14 +104,24 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<Crystal, CrystalError> {
         std::array::from_fn(|v| std::array::from_fn(|c| numbers[3 * v + c]));
     // Columns of M are a, b, c: r = M f.
     let m: [[f64; 3]; 3] = std::array::from_fn(|r| std::array::from_fn(|c| vectors[c][r]));
-    let to_fractional = invert(m).ok_or_else(|| {
+    let lengths = vectors.map(|v| v.iter().map(|c| c * c).sum::<f64>().sqrt());
+    let flat = || {
         error(
             file,
             2,
             lattice.2,
-            "the lattice vectors are linearly dependent",
+            "the lattice vectors span no volume (one is zero or they lie in a plane)",
         )
-    })?;
+    };
+    // Judged by the volume relative to the edges' lengths, as a CIF's angles are, so that
+    // neither the unit nor the cell's size decides whether it is flat.
+    let unit_volume = det3(m) / (lengths[0] * lengths[1] * lengths[2]);
+    // NaN (a zero edge) is flat too.
+    let spans = (unit_volume * unit_volume).partial_cmp(&super::FLAT_CELL);
+    if spans != Some(std::cmp::Ordering::Greater) {
+        return Err(flat());
+    }
+    let to_fractional = invert(m).ok_or_else(flat)?;
 
     let (species_column, position_column) = match pairs
         .iter()
@@ -121,7 +131,6 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<Crystal, CrystalError> {
         Some((_, spec, column)) => properties(file, spec, *column)?,
     };
 
-    let lengths = vectors.map(|v| v.iter().map(|c| c * c).sum::<f64>().sqrt());
     let angle = |i: usize, j: usize| {
         let dot: f64 = (0..3).map(|c| vectors[i][c] * vectors[j][c]).sum();
         (dot / (lengths[i] * lengths[j]))
@@ -188,11 +197,16 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<Crystal, CrystalError> {
     })
 }
 
-fn invert(m: [[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
-    let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+fn det3(m: [[f64; 3]; 3]) -> f64 {
+    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
         - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    if det.abs() < 1e-12 || !det.is_finite() {
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+}
+
+/// The inverse of `m`, whose columns the caller has checked span a volume.
+fn invert(m: [[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
+    let det = det3(m);
+    if det == 0.0 || !det.is_finite() {
         return None;
     }
     let c =
@@ -287,5 +301,20 @@ mod tests {
         assert_eq!((e.line, e.column), (4, 5), "{e}");
         let e = read("t.xyz", b"1\nno lattice\nSi 0 0 0\n").unwrap_err();
         assert_eq!(e.line, 2, "{e}");
+    }
+
+    #[test]
+    fn a_flat_lattice_is_an_error_whatever_its_size() {
+        let with = |lattice: &str| format!("1\nLattice=\"{lattice}\"\nSi 0 0 0\n");
+        // Kilometre-long edges, c in the plane of a and b but for 1e-9: a determinant of
+        // 1e-3 (an absolute test passes it) in a cell whose volume is ~7e-13 of a·b·c.
+        let e = read("t.xyz", with("1000 0 0 0 1000 0 1000 1000 1e-9").as_bytes()).unwrap_err();
+        assert_eq!((e.line, e.column), (2, 9), "{e}");
+        assert!(e.message.contains("span no volume"), "{e}");
+        let e = read("t.xyz", with("4 0 0 0 5 0 0 0 0").as_bytes()).unwrap_err();
+        assert_eq!((e.line, e.column), (2, 9), "{e}");
+        // A tiny but square cell is a cell: 1e-5 edges, determinant 1e-15.
+        let c = read("t.xyz", with("1e-5 0 0 0 1e-5 0 0 0 1e-5").as_bytes()).unwrap();
+        assert_eq!(c.angles, [90.0, 90.0, 90.0]);
     }
 }

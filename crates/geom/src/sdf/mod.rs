@@ -72,7 +72,7 @@ pub use error::SdfError;
 pub use external::{ExternalField, ExternalSolids, NoExternalSolids};
 pub use field::SdfField;
 pub use include::{IncludeResolver, Included, MAX_DEPTH, MAX_WORDS, expand};
-pub use options::{OptionError, parse_box, parse_samples, spread_samples};
+pub use options::{MAX_SAMPLES_PER_AXIS, OptionError, parse_box, parse_samples, spread_samples};
 pub use parse::{BINARY_WORDS, SOLID_WORDS, UNARY_WORDS};
 pub use sampler::{TILE_X, TILE_Y};
 pub use tree::{Node, Op, Tree};
