@@ -10,6 +10,10 @@
 //!   lone carriage return…) are shown as their Unicode pictures (`␀`, `␛`, `␍`), as rustc
 //!   shows them, and invisible formatting characters (bidirectional overrides, zero-width
 //!   spaces, C1 controls) as `\u{…}`; tabs as four spaces. Carets stay under what they mark.
+//! - A diagnostic's size does not grow with its line: a line longer than [`SHOWN_CHARS`]
+//!   characters is kept and shown as a window around the span, cut ends marked `…`. (A
+//!   mangled 60 kB one-line manifest has thousands of TOML errors; each with the whole line
+//!   took gigabytes to render.)
 //!
 //! The renderer is hand-rolled rather than taken from `annotate-snippets`: we only ever show one
 //! line with one underline, and owning the ~80 lines keeps the exact text stable (it is under
@@ -35,6 +39,11 @@ pub struct Diagnostic {
     pub origin: Option<String>,
 }
 
+/// Longest line shown whole, in characters.
+pub const SHOWN_CHARS: usize = 120;
+/// Characters of a longer line shown before the span.
+const CONTEXT_BEFORE: usize = 40;
+
 /// A place in a source text, resolved to what a reader needs to see it.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Location {
@@ -44,9 +53,14 @@ pub struct Location {
     pub line: usize,
     /// 1-based column, counted in characters (not bytes).
     pub column: usize,
-    /// The text of the line, without its line break.
+    /// The text of the line, without its line break; of a line longer than [`SHOWN_CHARS`],
+    /// that many characters around the span, with `…` for each end cut off.
     pub source_line: String,
-    /// How many characters to underline, starting at `column` (at least 1).
+    /// The column of the line that the first character of `source_line` stands for: 1, or
+    /// for a line cut at its start, the column of the last character left out (its `…`).
+    pub first_column: usize,
+    /// How many characters to underline, starting at `column` (at least 1; a window's
+    /// underline stops at its end).
     pub underline: usize,
 }
 
@@ -103,12 +117,57 @@ impl Location {
         // A span running onto later lines is underlined to the end of its first line only.
         let underline_end = end.min(line_start + source_line.len()).max(start);
         let underline = text[start..underline_end].chars().count().max(1);
+        if source_line.chars().nth(SHOWN_CHARS).is_none() {
+            return Location {
+                file: file.to_string(),
+                line,
+                column,
+                source_line: source_line.to_string(),
+                first_column: 1,
+                underline,
+            };
+        }
+        // A window of SHOWN_CHARS characters, from CONTEXT_BEFORE characters before the span
+        // (byte `at` of the line), moved back to stay full near the line's end. Found by
+        // walking characters from the span, so its cost does not grow with the line.
+        let at = (start - line_start).min(source_line.len());
+        let back = |b: usize| source_line[..b].chars().next_back().map(char::len_utf8);
+        let mut begin = at;
+        for _ in 0..CONTEXT_BEFORE {
+            match back(begin) {
+                Some(n) => begin -= n,
+                None => break,
+            }
+        }
+        let mut end = begin;
+        let mut count = 0;
+        for c in source_line[begin..].chars().take(SHOWN_CHARS) {
+            end += c.len_utf8();
+            count += 1;
+        }
+        while count < SHOWN_CHARS {
+            let Some(n) = back(begin) else { break };
+            begin -= n;
+            count += 1;
+        }
+        // 0-based character index of the window's first character in the line.
+        let begin_index = column - 1 - text[line_start + begin..start].chars().count();
+        let mut shown = String::with_capacity(end - begin + 6);
+        if begin > 0 {
+            shown.push('…');
+        }
+        shown.push_str(&source_line[begin..end]);
+        if end < source_line.len() {
+            shown.push('…');
+        }
+        let after = source_line[at..end].chars().count();
         Location {
             file: file.to_string(),
             line,
             column,
-            source_line: source_line.to_string(),
-            underline,
+            source_line: shown,
+            first_column: begin_index.max(1),
+            underline: underline.min(after).max(1),
         }
     }
 }
@@ -166,12 +225,12 @@ fn render_one(out: &mut String, diag: &Diagnostic) {
         let before: String = loc
             .source_line
             .chars()
-            .take(loc.column.saturating_sub(1))
+            .take(loc.column.saturating_sub(loc.first_column))
             .collect();
         let marked: String = loc
             .source_line
             .chars()
-            .skip(loc.column.saturating_sub(1))
+            .skip(loc.column.saturating_sub(loc.first_column))
             .take(loc.underline)
             .collect();
         let indent = " ".repeat(visible(&before).chars().count());
@@ -263,6 +322,56 @@ error: could not load `lattice.toml` due to 1 previous error
             "{out}"
         );
         assert!(out.ends_with("error: aborting due to 1 previous error\n"));
+    }
+
+    /// Found by `cargo xtask fuzz` (tests/fuzz_corpus/manifest): thousands of TOML errors on
+    /// one 60 kB line, each diagnostic holding and rendering the whole line, took 2 GB.
+    #[test]
+    fn long_lines_are_shown_as_a_window_around_the_span() {
+        let line: String = (0..1000)
+            .map(|i| char::from(b'a' + (i % 26) as u8))
+            .collect();
+        let text = format!("x = 1\n{line}\n");
+        let at = |col: usize| 6 + col - 1;
+        // In the middle: 40 characters before the span, `…` at both ends.
+        let loc = Location::of_span("f", &text, at(501)..at(505));
+        assert_eq!((loc.line, loc.column, loc.underline), (2, 501, 4));
+        assert_eq!(loc.source_line.chars().count(), SHOWN_CHARS + 2);
+        assert_eq!(loc.first_column, 460);
+        assert_eq!(loc.source_line, format!("…{}…", &line[460..580]));
+        let out = render(&[Diagnostic::error("m").with_location(loc)]);
+        let lines: Vec<&str> = out.lines().collect();
+        // The carets stand under the span's characters (columns 501..=504).
+        let caret = lines[4].chars().position(|c| c == '^').expect("carets");
+        let row: String = lines[3].chars().skip(caret).take(4).collect();
+        assert_eq!(row, line[500..504]);
+        assert_eq!(lines[4].chars().skip(caret).collect::<String>(), "^^^^");
+        // At the start: no leading `…`; at the end: a full window, no trailing `…`.
+        let loc = Location::of_span("f", &text, at(3)..at(4));
+        assert_eq!(loc.first_column, 1);
+        assert_eq!(loc.source_line, format!("{}…", &line[..120]));
+        let loc = Location::of_span("f", &text, at(1000)..at(2000));
+        assert_eq!(loc.source_line, format!("…{}", &line[880..]));
+        assert_eq!((loc.first_column, loc.underline), (880, 1));
+        // Characters, not bytes.
+        let wide = format!("{}x{}", "é".repeat(300), "é".repeat(300));
+        let loc = Location::of_span("f", &wide, 600..601);
+        assert_eq!((loc.column, loc.first_column), (301, 260));
+        assert_eq!(
+            loc.source_line,
+            format!("…{}x{}…", "é".repeat(40), "é".repeat(79))
+        );
+        // The rendered size no longer depends on the line's length.
+        let diags: Vec<Diagnostic> = (0..1000)
+            .map(|c| {
+                Diagnostic::error("m").with_location(Location::of_span(
+                    "f",
+                    &text,
+                    at(c + 1)..at(c + 2),
+                ))
+            })
+            .collect();
+        assert!(render(&diags).len() < 1000 * 400);
     }
 
     #[test]

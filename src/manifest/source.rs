@@ -48,6 +48,8 @@ pub(crate) fn not_utf8(name: &str, bytes: &[u8], err: Utf8Error) -> Diagnostic {
         line: bytes[..at].iter().filter(|&&b| b == b'\n').count() + 1,
         column: before.chars().count() + 1,
         source_line,
+        // One diagnostic per file, so the whole line is shown however long.
+        first_column: 1,
         // Each byte is shown as four characters, `\xHH`.
         underline: 4 * bad_len,
     };

@@ -3,8 +3,9 @@
 //! then one atom per line with Cartesian positions.
 //!
 //! Invariants: positions are converted to fractional coordinates of the lattice (the columns
-//! of `[a b c]`); the structure has no symmetry operations beyond the identity; a missing or
-//! singular lattice, a short file or a bad number is an error at its line and column.
+//! of `[a b c]`), always finite; the structure has no symmetry operations beyond the
+//! identity; a missing, singular or overflowing lattice, a short file or a bad number is an
+//! error at its line and column.
 
 use super::{Crystal, CrystalError, Site, SymOp};
 
@@ -122,6 +123,20 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<Crystal, CrystalError> {
         return Err(flat());
     }
     let to_fractional = invert(m).ok_or_else(flat)?;
+    // Finite numbers can still overflow in the lengths or the inverse (`1e308`), which would
+    // put atoms at NaN.
+    if lengths
+        .iter()
+        .chain(to_fractional.iter().flatten())
+        .any(|v| !v.is_finite())
+    {
+        return Err(error(
+            file,
+            2,
+            lattice.2,
+            "`Lattice` is out of range: its lengths or inverse overflow",
+        ));
+    }
 
     let (species_column, position_column) = match pairs
         .iter()
@@ -138,7 +153,8 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<Crystal, CrystalError> {
             .acos()
             .to_degrees()
     };
-    let mut sites = Vec::with_capacity(count);
+    // The count is the file's word: reserve no more than there are lines for.
+    let mut sites = Vec::with_capacity(count.min(lines.len().saturating_sub(2)));
     for n in 0..count {
         let number = n + 3;
         let line = lines.get(n + 2).ok_or_else(|| {
@@ -177,7 +193,16 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<Crystal, CrystalError> {
                     )
                 })?;
         }
-        let fract = std::array::from_fn(|i| (0..3).map(|j| to_fractional[i][j] * r[j]).sum());
+        let fract: [f64; 3] =
+            std::array::from_fn(|i| (0..3).map(|j| to_fractional[i][j] * r[j]).sum());
+        if fract.iter().any(|f| !f.is_finite()) {
+            return Err(error(
+                file,
+                number,
+                0,
+                format!("atom {}: its fractional coordinates overflow", n + 1),
+            ));
+        }
         let element: String = species
             .chars()
             .take_while(|c| c.is_ascii_alphabetic())
@@ -250,7 +275,7 @@ fn properties(file: &str, spec: &str, column: usize) -> Result<(usize, usize), C
             "`Properties` must be name:type:count triples",
         ));
     }
-    let (mut species, mut position, mut at) = (None, None, 0);
+    let (mut species, mut position, mut at) = (None, None, 0usize);
     for triple in fields.chunks(3) {
         let count: usize = triple[2].parse().map_err(|_| {
             error(
@@ -265,7 +290,14 @@ fn properties(file: &str, spec: &str, column: usize) -> Result<(usize, usize), C
             ("pos", "R", 3) => position = Some(at),
             _ => {}
         }
-        at += count;
+        at = at.checked_add(count).ok_or_else(|| {
+            error(
+                file,
+                2,
+                column,
+                "the counts of `Properties` add up to more columns than a line can have",
+            )
+        })?;
     }
     match (species, position) {
         (Some(s), Some(p)) => Ok((s, p)),
@@ -292,6 +324,39 @@ mod tests {
         assert_eq!(c.sites[1].species, "O");
         assert_eq!(c.lengths, [4.0, 5.0, 2.0]);
         assert_eq!(c.angles, [90.0, 90.0, 90.0]);
+    }
+
+    /// Found by `cargo xtask fuzz` (tests/fuzz_corpus/crystal-xyz): each of these panicked
+    /// (an overflowing column sum, a capacity overflow) or gave atoms at NaN.
+    #[test]
+    fn hostile_counts_and_overflowing_numbers_are_errors() {
+        let e = read(
+            "t.xyz",
+            b"2\nLattice=\"4 0 0 0 5 0 0 0 2\"Properties=::18446744073709551615:::3\n",
+        )
+        .unwrap_err();
+        assert_eq!((e.line, e.column), (2, 39), "{e}");
+        assert!(e.message.contains("add up to more columns"), "{e}");
+        // A count far past the lines: an error about the short file, not an allocation.
+        let e = read(
+            "t.xyz",
+            b"18446744073709551615\nLattice=\"4 0 0 0 5 0 0 0 2\"\nSi 0 0 0\n",
+        )
+        .unwrap_err();
+        assert_eq!(e.line, 4, "{e}");
+        assert!(e.message.contains("the file ends after 1"), "{e}");
+        // Finite numbers whose lengths and inverse overflow.
+        let e = read("t.xyz", b"1\nLattice=\"4 0 0 1 5 0 1e308 5 2\"\nSi 0 2 0\n").unwrap_err();
+        assert_eq!((e.line, e.column), (2, 9), "{e}");
+        assert!(e.message.contains("out of range"), "{e}");
+        // A fine lattice, but a position whose fractional coordinate overflows.
+        let e = read(
+            "t.xyz",
+            b"2\nLattice=\"1e-4 0 0 0 1e-4 0 0 0 1e4\"\nSi 0 0 0\nO 1e305 0 0\n",
+        )
+        .unwrap_err();
+        assert_eq!(e.line, 4, "{e}");
+        assert!(e.message.contains("atom 2"), "{e}");
     }
 
     #[test]
