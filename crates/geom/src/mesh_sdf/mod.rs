@@ -40,6 +40,9 @@
 //! step to it is shorter than the distance to the surface (or, for containment, when no
 //! triangle's box meets the step). On open surfaces every sample evaluates `w`.
 //!
+//! Invariant: every value is the same bits for any rayon thread count; parallel sums (the
+//! orientation's volume, the exact winding number) add fixed blocks in order.
+//!
 //! Limit: at most 2²⁹ triangles ([`MeshSdfError::TooLarge`]), so that a BVH node's links fit
 //! one word beside its oriented box (`bvh.rs`).
 //!
