@@ -84,9 +84,9 @@ fn box_triangles(min: [f64; 3], max: [f64; 3], samples: [usize; 3], density: f64
 }
 
 /// Memory of the contourer's planes: two planes of samples and vertex ids per chunk, one
-/// chunk per thread.
+/// chunk per core. Cores, not `-j`: reports are the same bytes for any thread count.
 fn plane_bytes(samples: [usize; 3]) -> f64 {
-    let threads = rayon::current_num_threads() as f64;
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
     threads * samples[0] as f64 * samples[1] as f64 * 40.0
 }
 
