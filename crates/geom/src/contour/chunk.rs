@@ -13,6 +13,7 @@
 
 use super::table::{CORNER_SLOT, Tables};
 use crate::field::{Grid, PlaneSampler};
+use crate::mesh::round_inside;
 
 /// Marks a vertex id as an ordinal among the next chunk's first vertices.
 pub const FOREIGN: u32 = 1 << 31;
@@ -137,14 +138,31 @@ impl ChunkContext<'_> {
         }
     }
 
+    /// Position of sample `(i, j, k)`.
     #[inline]
-    fn position(&self, i: f64, j: f64, k: f64) -> [f32; 3] {
+    fn position(&self, i: usize, j: usize, k: usize) -> [f32; 3] {
         let g = self.model;
         [
-            (g.origin[0] + i * g.spacing[0]) as f32,
-            (g.origin[1] + j * g.spacing[1]) as f32,
-            (g.origin[2] + k * g.spacing[2]) as f32,
+            g.coord(0, i) as f32,
+            g.coord(1, j) as f32,
+            g.coord(2, k) as f32,
         ]
+    }
+
+    /// Position of the crossing a fraction `t` along the edge from sample `at` to the next
+    /// sample along `axis`: strictly inside the edge in `f32` too ([`round_inside`]), which
+    /// `contour` has checked the grid leaves room for.
+    #[inline]
+    fn crossing_position(&self, at: [usize; 3], axis: usize, t: f64) -> [f32; 3] {
+        let g = self.model;
+        let mut p = self.position(at[0], at[1], at[2]);
+        let i = at[axis];
+        p[axis] = round_inside(
+            g.origin[axis] + (i as f64 + t) * g.spacing[axis],
+            g.coord(axis, i),
+            g.coord(axis, i + 1),
+        );
+        p
     }
 
     /// Records the items of one word and gives them ids; owned items become vertices at the
@@ -190,7 +208,6 @@ impl ChunkContext<'_> {
             y_edge,
             node,
         } = plane;
-        let kf = k as f64;
         for j in 0..ny {
             let row = &inside[j * wpr..(j + 1) * wpr];
             for w in 0..wpr {
@@ -199,7 +216,7 @@ impl ChunkContext<'_> {
                 let mask = (row[w] ^ shifted) & edge_mask(w, wpr, nx - 1);
                 Self::assign(x_edge, j * wpr + w, mask, w, &mut ids, |i| {
                     let t = Self::crossing(values[j * nx + i], values[j * nx + i + 1]);
-                    self.position(i as f64 + t, j as f64, kf)
+                    self.crossing_position([i, j, k], 0, t)
                 });
             }
         }
@@ -217,7 +234,7 @@ impl ChunkContext<'_> {
                 };
                 Self::assign(y_edge, j * wpr + w, mask, w, &mut ids, |i| {
                     let t = Self::crossing(values[j * nx + i], values[(j + 1) * nx + i]);
-                    self.position(i as f64, j as f64 + t, kf)
+                    self.crossing_position([i, j, k], 1, t)
                 });
             }
         }
@@ -237,7 +254,7 @@ impl ChunkContext<'_> {
                 };
                 let mask = inside[j * wpr + w] & columns;
                 Self::assign(node, j * wpr + w, mask, w, &mut ids, |i| {
-                    self.position(i as f64, j as f64, kf)
+                    self.position(i, j, k)
                 });
             }
         }
@@ -267,7 +284,7 @@ impl ChunkContext<'_> {
                 let mask = (lower.inside[word] ^ upper.inside[word]) & word_mask;
                 Self::assign(z_edge, word, mask, w, &mut ids, |i| {
                     let t = Self::crossing(lower.values[j * nx + i], upper.values[j * nx + i]);
-                    self.position(i as f64, j as f64, k as f64 + t)
+                    self.crossing_position([i, j, k], 2, t)
                 });
             }
         }

@@ -15,8 +15,16 @@
 //! - Determinism: chunk boundaries depend only on the grid, chunks are assembled in order and
 //!   samples are pure functions of their plane, so the mesh is bit-identical whatever the
 //!   number of threads.
-//! - Vertices are never closer than 1/256 of an edge to a sample point, so no two vertices
-//!   share a position even where the field is exactly zero at a sample.
+//! - No two vertices share an `f32` position and no triangle is flat, wherever the grid is
+//!   placed. Crossings stay 1/256 of an edge from its ends (even where the field is exactly
+//!   zero at a sample), and their `f32` positions strictly inside their edge's rounded ends
+//!   ([`crate::mesh::round_inside`]): far from the origin 1/256 of an edge can be less than an
+//!   `f32` step, and a crossing rounded onto its sample point collided with its neighbours (a
+//!   gyroid on [1000, 1002]³ at 200 samples: 366 duplicate positions, 747 flat triangles).
+//!   A grid whose rounded samples leave no `f32` strictly inside some edge cannot keep that
+//!   promise and is refused ([`ContourError::BeyondF32`]): the mesh is written as `f32` (STL
+//!   has nothing else), so no placement of its vertices would be honest. Vertices are
+//!   computed once, in `f64` from the grid, and rounded once.
 
 mod chunk;
 pub mod table;
@@ -24,7 +32,7 @@ pub mod table;
 use rayon::prelude::*;
 
 use crate::field::{Grid, PlaneSampler};
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, inseparable_edge};
 use chunk::{ChunkContext, ChunkMesh, FOREIGN};
 
 /// Why a grid could not be contoured.
@@ -38,6 +46,21 @@ pub enum ContourError {
     GridMismatch {
         sampler: [usize; 3],
         model: [usize; 3],
+    },
+    /// Two neighbouring samples so close for their distance from the origin that no 32-bit
+    /// float lies between their own roundings: no vertex could be placed between them.
+    #[error(
+        "the samples are too close together for 32-bit positions (what mesh files store) this far from the origin: along {} samples {index} and {} lie at {} and {}, with no 32-bit value between them; place the domain nearer the origin or use fewer samples",
+        ["x", "y", "z"][*axis],
+        index + 1,
+        f64::from_bits(at_bits[0]),
+        f64::from_bits(at_bits[1])
+    )]
+    BeyondF32 {
+        axis: usize,
+        index: usize,
+        /// The two coordinates, as bits (keeping the error `Eq`).
+        at_bits: [u64; 2],
     },
 }
 
@@ -63,6 +86,15 @@ pub fn contour(
             sampler: sampler.grid().counts,
             model: counts,
         });
+    }
+    for (axis, &count) in counts.iter().enumerate() {
+        if let Some((index, a, b)) = inseparable_edge(count, |i| model.coord(axis, i)) {
+            return Err(ContourError::BeyondF32 {
+                axis,
+                index,
+                at_bits: [a.to_bits(), b.to_bits()],
+            });
+        }
     }
     let ctx = ChunkContext {
         sampler,
