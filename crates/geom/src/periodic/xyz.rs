@@ -114,6 +114,19 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<Crystal, CrystalError> {
             "the lattice vectors span no volume (one is zero or they lie in a plane)",
         )
     };
+    // Finite numbers can still overflow in the lengths (`1e308`), which would make the
+    // flatness test below meaningless and put atoms at NaN.
+    let out_of_range = || {
+        error(
+            file,
+            2,
+            lattice.2,
+            "`Lattice` is out of range: its lengths or inverse overflow",
+        )
+    };
+    if lengths.iter().any(|v| !v.is_finite()) {
+        return Err(out_of_range());
+    }
     // Judged by the volume relative to the edges' lengths, as a CIF's angles are, so that
     // neither the unit nor the cell's size decides whether it is flat.
     let unit_volume = det3(m) / (lengths[0] * lengths[1] * lengths[2]);
@@ -123,19 +136,8 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<Crystal, CrystalError> {
         return Err(flat());
     }
     let to_fractional = invert(m).ok_or_else(flat)?;
-    // Finite numbers can still overflow in the lengths or the inverse (`1e308`), which would
-    // put atoms at NaN.
-    if lengths
-        .iter()
-        .chain(to_fractional.iter().flatten())
-        .any(|v| !v.is_finite())
-    {
-        return Err(error(
-            file,
-            2,
-            lattice.2,
-            "`Lattice` is out of range: its lengths or inverse overflow",
-        ));
+    if to_fractional.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(out_of_range());
     }
 
     let (species_column, position_column) = match pairs
