@@ -122,6 +122,9 @@ fn check_input_files(
 
 /// Validates manifest `text`, with `--set` overrides applied. `path` is shown in diagnostics
 /// as given, and locates the manifest's directory (`root`) and its `out_dir`; it is not read.
+/// How many TOML syntax errors a failed parse shows.
+const SHOWN_SYNTAX_ERRORS: usize = 10;
+
 pub fn parse(text: &str, path: &Path, overrides: &[String]) -> Result<Manifest, Vec<Diagnostic>> {
     let sources = Sources::new(path.display().to_string(), text, overrides);
     let mut report = Report::new(&sources);
@@ -129,12 +132,26 @@ pub fn parse(text: &str, path: &Path, overrides: &[String]) -> Result<Manifest, 
 
     let (tree, syntax_errors) = DeTable::parse_recoverable(text);
     if !syntax_errors.is_empty() {
-        for err in syntax_errors {
-            let span = err.span().unwrap_or(0..0);
-            report.at(
-                &span,
-                Diagnostic::error("invalid TOML").with_label(err.message().replace('\n', ", ")),
-            );
+        // The parser's recovery can report an error per line of a broken file (18000 for one
+        // unclosed quote); the first few are the useful ones, and locating each costs a scan.
+        let mut errors: Vec<_> = syntax_errors
+            .iter()
+            .map(|e| (e.span().unwrap_or(0..0), e.message()))
+            .collect();
+        errors.sort_by_key(|(span, _)| span.start);
+        let hidden = errors.len().saturating_sub(SHOWN_SYNTAX_ERRORS);
+        errors.truncate(SHOWN_SYNTAX_ERRORS);
+        let last = errors.len() - 1;
+        for (i, (span, message)) in errors.into_iter().enumerate() {
+            let mut diag =
+                Diagnostic::error("invalid TOML").with_label(message.replace('\n', ", "));
+            if i == last && hidden > 0 {
+                diag = diag.with_note(format!(
+                    "{hidden} more syntax errors follow; fix these first, later ones often \
+                     come from them"
+                ));
+            }
+            report.at(&span, diag);
         }
         return Err(report.finish());
     }

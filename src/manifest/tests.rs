@@ -1412,3 +1412,30 @@ fn a_set_override_cannot_make_outputs_collide() {
         "{text}"
     );
 }
+
+/// Found by `cargo xtask fuzz`: one unclosed quote made the parser's recovery report an error
+/// per following line, each located by a scan of the file (18000 errors, over a second).
+#[test]
+fn a_broken_file_shows_its_first_ten_syntax_errors_and_counts_the_rest() {
+    let text = format!(
+        "[cells.u]\nexpr = \"x\nsymmetry = \"Oh\n{}",
+        "symmetry = \" \"p\"\n".repeat(3000)
+    );
+    let rendered = render_errors(&text, &[]);
+    assert_eq!(
+        rendered.matches("error: invalid TOML").count(),
+        10,
+        "{rendered}"
+    );
+    let note = rendered
+        .lines()
+        .find(|l| l.contains("more syntax errors follow"))
+        .expect("the rest are counted");
+    let hidden: usize = note
+        .split_whitespace()
+        .find_map(|w| w.parse().ok())
+        .expect("a count");
+    assert!(hidden > 3000, "{note}");
+    // The ten shown are the first in the file.
+    assert!(rendered.contains("lattice.toml:2:"), "{rendered}");
+}

@@ -175,8 +175,8 @@ fn content_name(bytes: &[u8]) -> String {
 }
 
 /// The outcome with what varies between inputs of one code path left out: it keeps the
-/// words made of letters only (and their punctuation), outside backticks and quotes, which
-/// are the fixed words of a message; numbers and quoted input are what the input varied.
+/// short words made of letters only (and their punctuation), outside backticks and quotes,
+/// which are the fixed words of a message; numbers and quoted input are what the input varied.
 /// A summary of what was read (`ok …`, sizes already grouped) is kept up to ` | `. Messages
 /// joined by `; ` count as a set, each by its first words (where messages differ; later
 /// words tend to repeat the input).
@@ -211,7 +211,9 @@ fn normalize_message(outcome: &str) -> String {
             }
             continue;
         }
+        // Long words are input that a message repeats without quotes (a PLY element name).
         if !bare.is_empty()
+            && bare.len() <= 16
             && bare
                 .chars()
                 .all(|c| c.is_ascii_alphabetic() || "-'(/_$".contains(c))

@@ -40,6 +40,12 @@ use chunk::{ChunkContext, ChunkMesh, FOREIGN};
 pub enum ContourError {
     #[error("the grid needs at least 2 samples per axis, got {0:?}")]
     TooFewSamples([usize; 3]),
+    /// The box, as `[x0,x1]×[y0,y1]×[z0,z1]`.
+    #[error(
+        "the box {0} cannot be sampled: its sides must be finite and positive, and so must \
+         the spacing of its samples"
+    )]
+    BadBox(String),
     #[error("the mesh would have {0} vertices, more than 32-bit indices can address")]
     TooManyVertices(u64),
     #[error("the sampler's grid has {sampler:?} samples but the model grid has {model:?}")]
