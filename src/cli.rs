@@ -59,7 +59,8 @@ enum Command {
                             Options, anywhere among the words: -s SAMPLES (a total like 100^3, \
                             or NX,NY,NZ; default 60^3), -b X0,Y0,Z0,X1,Y1,Z1 (default: the \
                             solid's bounds), -o FILE (default out.ply; .stl .ply .obj .off .vtk), \
-                            -q (no summary)."
+                            -q (no summary), --allow-large (contour even a grid estimated \
+                            to need more memory or disk than the machine has)."
     )]
     Sdf(SdfArgs),
     /// Reconstruct the periodic surface through a crystal's atoms (CIF or extended XYZ)
@@ -122,6 +123,13 @@ pub struct BuildArgs {
     /// Also write the reports as one JSON array to FILE (`-` for stdout)
     #[arg(long, value_name = "FILE")]
     pub report: Option<String>,
+    /// Succeed even when an output's mesh is not watertight or not manifold (the files and
+    /// reports are written either way; the report lists the defects)
+    #[arg(long)]
+    pub allow_defects: bool,
+    /// Build even when the estimated memory or disk use exceeds what the machine has
+    #[arg(long)]
+    pub allow_large: bool,
 }
 
 /// Why a build did not succeed, with its exit code.
@@ -210,7 +218,7 @@ fn run_cell(args: &CellArgs) -> Result<(), Failure> {
     let points = match &args.points {
         None => Vec::new(),
         Some(path) => {
-            let text = std::fs::read_to_string(path).map_err(|e| {
+            let text = crate::files::read_input_text(path).map_err(|e| {
                 Failure::Usage(format!("error: cannot read `{}`: {e}\n", path.display()))
             })?;
             crate::inspect::read_points(&path.display().to_string(), &text, group.dimension())
@@ -242,11 +250,19 @@ fn run_cell(args: &CellArgs) -> Result<(), Failure> {
 }
 
 fn set_jobs(jobs: Option<usize>) -> Result<(), Failure> {
-    let Some(jobs) = jobs else { return Ok(()) };
+    let Some(mut jobs) = jobs else { return Ok(()) };
     if jobs == 0 {
         return Err(Failure::Usage(
             "error: `--jobs` must be at least 1\n".into(),
         ));
+    }
+    // More threads than this only cost memory and start-up time (`-j 100000` spent a minute
+    // spawning threads): the work splits into far fewer pieces.
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let most = (4 * cores).max(64);
+    if jobs > most {
+        eprintln!("warning: `--jobs {jobs}` is more than this machine can use; using {most}");
+        jobs = most;
     }
     rayon::ThreadPoolBuilder::new()
         .num_threads(jobs)
@@ -278,6 +294,7 @@ fn compile(manifest: &Manifest) -> Result<Graph, Failure> {
 /// One build: manifest to files and reports.
 pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
     let manifest = load_manifest(&args.manifest)?;
+    crate::files::check_report_path(args.report.as_deref(), &manifest).map_err(Failure::Usage)?;
     let graph = compile(&manifest)?;
     if let Err(unknown) = graph.needed(&args.targets) {
         let names: Vec<&str> = graph.outputs.keys().map(String::as_str).collect();
@@ -294,7 +311,24 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
         }
         return Err(Failure::Usage(text));
     }
+    let estimates = crate::budget::estimate(&manifest, &args.targets);
+    if !args.allow_large {
+        let machine = crate::budget::Machine::probe(&manifest.out_dir);
+        let refused = crate::budget::refusals(&estimates, machine);
+        if !refused.is_empty() {
+            let mut text = String::new();
+            for why in refused {
+                text.push_str(&format!("error: {why}\n"));
+            }
+            text.push_str(
+                "  = help: lower the samples or resolution, or pass `--allow-large` to build \
+                 anyway (the figures are upper-end estimates)\n",
+            );
+            return Err(Failure::Usage(text));
+        }
+    }
     let cache = open_cache(&manifest.path, args.quiet)?;
+    sweep_outputs(&manifest, args.verbose > 0);
     let sink = OutputDir::new(manifest.out_dir.clone());
     let bars;
     let progress: &dyn Progress = if !args.quiet && std::io::stderr().is_terminal() {
@@ -306,6 +340,13 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
     let results = Builder::new(&graph, &cache, &sink, progress)
         .build(&args.targets)
         .map_err(|e| Failure::Build(e.to_string()))?;
+    // The outputs are in place: what they replaced, and the cache entries gc collected, are
+    // freed by a detached helper, so the command need not wait for the disk. Handed over
+    // before anything is printed: a closed stdout or stderr ends the process at its next
+    // write (SIGPIPE, see main.rs), which would leave them under their temporary names.
+    let mut freed = sink.take_replaced();
+    freed.extend(cache.take_collected());
+    crate::deferred_free::free_detached(freed);
     let mut reports = Vec::new();
     for result in &results {
         if args.verbose > 0 {
@@ -322,7 +363,11 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
                 }
             }
         }
-        let report = Report::new(&manifest, result);
+        let mut report = Report::new(&manifest, result);
+        report.estimate = estimates
+            .iter()
+            .find(|(name, _)| *name == result.name)
+            .map(|(_, e)| e.clone());
         let path = manifest
             .out_dir
             .join(format!("{}.report.json", result.name));
@@ -345,15 +390,23 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
         }
         Some(file) => {
             let json = serde_json::to_string_pretty(&reports).expect("reports serialize");
-            write_atomically(Path::new(file), &mut |w| w.write_all(json.as_bytes()))
+            crate::files::write_user_file(Path::new(file), &mut |w| w.write_all(json.as_bytes()))
                 .map_err(|e| Failure::Build(format!("cannot write `{file}`: {e}")))?;
         }
     }
-    // The outputs are in place and reported: what they replaced, and the cache entries gc
-    // collected, are freed by a detached helper, so the command need not wait for the disk.
-    let mut freed = sink.take_replaced();
-    freed.extend(cache.take_collected());
-    crate::deferred_free::free_detached(freed);
+    let defective: Vec<String> = reports
+        .iter()
+        .filter(|r| !r.defects.is_empty())
+        .map(|r| format!("`{}`: {}", r.name, r.defects.join("; ")))
+        .collect();
+    if !defective.is_empty() && !args.allow_defects {
+        return Err(Failure::Build(format!(
+            "{} output(s) failed the mesh check (written and reported, but not usable as \
+             solids; `--allow-defects` accepts them):\n  {}",
+            defective.len(),
+            defective.join("\n  ")
+        )));
+    }
     Ok(())
 }
 
@@ -368,9 +421,22 @@ fn run_graph(args: &ManifestArgs) -> Result<(), Failure> {
     Ok(())
 }
 
+/// Removes the temporary files that killed builds left among the outputs.
+fn sweep_outputs(manifest: &Manifest, verbose: bool) {
+    for path in crate::files::sweep_stale_temporaries(&manifest::output_dirs(manifest)) {
+        if verbose {
+            eprintln!(
+                "  removed `{}`, left by an interrupted build",
+                path.display()
+            );
+        }
+    }
+}
+
 fn run_clean(args: &ManifestArgs) -> Result<(), Failure> {
     let manifest = load_manifest(args)?;
     let mut cache = open_cache(&manifest.path, false)?;
+    sweep_outputs(&manifest, false);
     cache.clean().map_err(|e| Failure::Build(e.to_string()))?;
     eprintln!("removed the cache of `{}`", manifest.path.display());
     Ok(())

@@ -61,7 +61,7 @@ pub fn run(args: &CrystalArgs) -> ExitCode {
         ));
     }
     let given = args.file.display().to_string();
-    let bytes = match std::fs::read(&args.file) {
+    let bytes = match crate::files::read_input(&args.file) {
         Ok(b) => b,
         Err(e) => return usage(format!("cannot read `{given}`: {e}")),
     };

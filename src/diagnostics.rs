@@ -6,6 +6,14 @@
 //!   source text and no file system.
 //! - Rendering is plain text, deterministic and free of colour, in the style of rustc and cargo:
 //!   messages are lower case, name things in backticks and end without a period.
+//! - Nothing a file contains reaches the terminal raw: control characters (NUL, escape, a
+//!   lone carriage return…) are shown as their Unicode pictures (`␀`, `␛`, `␍`), as rustc
+//!   shows them, and invisible formatting characters (bidirectional overrides, zero-width
+//!   spaces, C1 controls) as `\u{…}`; tabs as four spaces. Carets stay under what they mark.
+//! - A diagnostic's size does not grow with its line: a line longer than [`SHOWN_CHARS`]
+//!   characters is kept and shown as a window around the span, cut ends marked `…`. (A
+//!   mangled 60 kB one-line manifest has thousands of TOML errors; each with the whole line
+//!   took gigabytes to render.)
 //!
 //! The renderer is hand-rolled rather than taken from `annotate-snippets`: we only ever show one
 //! line with one underline, and owning the ~80 lines keeps the exact text stable (it is under
@@ -31,6 +39,11 @@ pub struct Diagnostic {
     pub origin: Option<String>,
 }
 
+/// Longest line shown whole, in characters.
+pub const SHOWN_CHARS: usize = 120;
+/// Characters of a longer line shown before the span.
+const CONTEXT_BEFORE: usize = 40;
+
 /// A place in a source text, resolved to what a reader needs to see it.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Location {
@@ -40,9 +53,14 @@ pub struct Location {
     pub line: usize,
     /// 1-based column, counted in characters (not bytes).
     pub column: usize,
-    /// The text of the line, without its line break.
+    /// The text of the line, without its line break; of a line longer than [`SHOWN_CHARS`],
+    /// that many characters around the span, with `…` for each end cut off.
     pub source_line: String,
-    /// How many characters to underline, starting at `column` (at least 1).
+    /// The column of the line that the first character of `source_line` stands for: 1, or
+    /// for a line cut at its start, the column of the last character left out (its `…`).
+    pub first_column: usize,
+    /// How many characters to underline, starting at `column` (at least 1; a window's
+    /// underline stops at its end).
     pub underline: usize,
 }
 
@@ -99,12 +117,57 @@ impl Location {
         // A span running onto later lines is underlined to the end of its first line only.
         let underline_end = end.min(line_start + source_line.len()).max(start);
         let underline = text[start..underline_end].chars().count().max(1);
+        if source_line.chars().nth(SHOWN_CHARS).is_none() {
+            return Location {
+                file: file.to_string(),
+                line,
+                column,
+                source_line: source_line.to_string(),
+                first_column: 1,
+                underline,
+            };
+        }
+        // A window of SHOWN_CHARS characters, from CONTEXT_BEFORE characters before the span
+        // (byte `at` of the line), moved back to stay full near the line's end. Found by
+        // walking characters from the span, so its cost does not grow with the line.
+        let at = (start - line_start).min(source_line.len());
+        let back = |b: usize| source_line[..b].chars().next_back().map(char::len_utf8);
+        let mut begin = at;
+        for _ in 0..CONTEXT_BEFORE {
+            match back(begin) {
+                Some(n) => begin -= n,
+                None => break,
+            }
+        }
+        let mut end = begin;
+        let mut count = 0;
+        for c in source_line[begin..].chars().take(SHOWN_CHARS) {
+            end += c.len_utf8();
+            count += 1;
+        }
+        while count < SHOWN_CHARS {
+            let Some(n) = back(begin) else { break };
+            begin -= n;
+            count += 1;
+        }
+        // 0-based character index of the window's first character in the line.
+        let begin_index = column - 1 - text[line_start + begin..start].chars().count();
+        let mut shown = String::with_capacity(end - begin + 6);
+        if begin > 0 {
+            shown.push('…');
+        }
+        shown.push_str(&source_line[begin..end]);
+        if end < source_line.len() {
+            shown.push('…');
+        }
+        let after = source_line[at..end].chars().count();
         Location {
             file: file.to_string(),
             line,
             column,
-            source_line: source_line.to_string(),
-            underline,
+            source_line: shown,
+            first_column: begin_index.max(1),
+            underline: underline.min(after).max(1),
         }
     }
 }
@@ -143,7 +206,7 @@ pub fn render(diags: &[Diagnostic]) -> String {
 }
 
 fn render_one(out: &mut String, diag: &Diagnostic) {
-    let _ = writeln!(out, "error: {}", diag.message);
+    let _ = writeln!(out, "error: {}", visible(&diag.message));
     // The gutter is as wide as the line number, as in rustc; one column when there is no line.
     let width = diag
         .location
@@ -151,22 +214,31 @@ fn render_one(out: &mut String, diag: &Diagnostic) {
         .map_or(1, |l| l.line.to_string().len());
     let pad = " ".repeat(width);
     if let Some(loc) = &diag.location {
-        let _ = writeln!(out, "{pad}--> {}:{}:{}", loc.file, loc.line, loc.column);
+        let file = visible(&loc.file);
+        let _ = writeln!(out, "{pad}--> {file}:{}:{}", loc.line, loc.column);
         let _ = writeln!(out, "{pad} |");
         // Built then trimmed, so an empty source line leaves no trailing space.
-        let line = format!("{} | {}", loc.line, expand_tabs(&loc.source_line));
+        let line = format!("{} | {}", loc.line, visible(&loc.source_line));
         let _ = writeln!(out, "{}", line.trim_end());
-        // Tabs are shown as four spaces, so the caret offset must count them the same way.
+        // Tabs and escapes are wider than the characters they show, so the caret offset and
+        // the underline count the shown text.
         let before: String = loc
             .source_line
             .chars()
-            .take(loc.column.saturating_sub(1))
+            .take(loc.column.saturating_sub(loc.first_column))
             .collect();
-        let indent = " ".repeat(expand_tabs(&before).chars().count());
-        let carets = "^".repeat(loc.underline.max(1));
+        let marked: String = loc
+            .source_line
+            .chars()
+            .skip(loc.column.saturating_sub(loc.first_column))
+            .take(loc.underline)
+            .collect();
+        let indent = " ".repeat(visible(&before).chars().count());
+        let width = visible(&marked).chars().count();
+        let carets = "^".repeat(width.max(loc.underline).max(1));
         match &diag.label {
             Some(label) => {
-                let _ = writeln!(out, "{pad} | {indent}{carets} {label}");
+                let _ = writeln!(out, "{pad} | {indent}{carets} {}", visible(label));
             }
             None => {
                 let _ = writeln!(out, "{pad} | {indent}{carets}");
@@ -174,21 +246,41 @@ fn render_one(out: &mut String, diag: &Diagnostic) {
         }
     } else if let Some(label) = &diag.label {
         // Without a line to underline, the label is still worth showing.
-        let _ = writeln!(out, "{pad} = note: {label}");
+        let _ = writeln!(out, "{pad} = note: {}", visible(label));
     }
     if diag.help.is_some() || !diag.notes.is_empty() {
         let _ = writeln!(out, "{pad} |");
         for note in &diag.notes {
-            let _ = writeln!(out, "{pad} = note: {note}");
+            let _ = writeln!(out, "{pad} = note: {}", visible(note));
         }
         if let Some(help) = &diag.help {
-            let _ = writeln!(out, "{pad} = help: {help}");
+            let _ = writeln!(out, "{pad} = help: {}", visible(help));
         }
     }
 }
 
-fn expand_tabs(text: &str) -> String {
-    text.replace('\t', "    ")
+/// `text` as it may be shown on a terminal: a tab as four spaces, a control character as its
+/// picture (U+2400 + code, `␡` for DEL; one character wide, so columns keep their place), and
+/// a character that would be invisible or reorder the line (C1 controls, bidirectional
+/// controls, zero-width characters, the byte-order mark) as `\u{…}`.
+fn visible(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '\t' => out.push_str("    "),
+            '\0'..='\x1f' => out.push(char::from_u32(0x2400 + c as u32).unwrap_or('\u{fffd}')),
+            '\x7f' => out.push('\u{2421}'),
+            '\u{80}'..='\u{9f}'
+            | '\u{200b}'..='\u{200f}'
+            | '\u{2028}'..='\u{202e}'
+            | '\u{2060}'..='\u{2069}'
+            | '\u{feff}' => {
+                let _ = write!(out, "\\u{{{:x}}}", c as u32);
+            }
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 #[cfg(test)]
@@ -230,6 +322,107 @@ error: could not load `lattice.toml` due to 1 previous error
             "{out}"
         );
         assert!(out.ends_with("error: aborting due to 1 previous error\n"));
+    }
+
+    /// Found by `cargo xtask fuzz` (tests/fuzz_corpus/manifest): thousands of TOML errors on
+    /// one 60 kB line, each diagnostic holding and rendering the whole line, took 2 GB.
+    #[test]
+    fn long_lines_are_shown_as_a_window_around_the_span() {
+        let line: String = (0..1000)
+            .map(|i| char::from(b'a' + (i % 26) as u8))
+            .collect();
+        let text = format!("x = 1\n{line}\n");
+        let at = |col: usize| 6 + col - 1;
+        // In the middle: 40 characters before the span, `…` at both ends.
+        let loc = Location::of_span("f", &text, at(501)..at(505));
+        assert_eq!((loc.line, loc.column, loc.underline), (2, 501, 4));
+        assert_eq!(loc.source_line.chars().count(), SHOWN_CHARS + 2);
+        assert_eq!(loc.first_column, 460);
+        assert_eq!(loc.source_line, format!("…{}…", &line[460..580]));
+        let out = render(&[Diagnostic::error("m").with_location(loc)]);
+        let lines: Vec<&str> = out.lines().collect();
+        // The carets stand under the span's characters (columns 501..=504).
+        let caret = lines[4].chars().position(|c| c == '^').expect("carets");
+        let row: String = lines[3].chars().skip(caret).take(4).collect();
+        assert_eq!(row, line[500..504]);
+        assert_eq!(lines[4].chars().skip(caret).collect::<String>(), "^^^^");
+        // At the start: no leading `…`; at the end: a full window, no trailing `…`.
+        let loc = Location::of_span("f", &text, at(3)..at(4));
+        assert_eq!(loc.first_column, 1);
+        assert_eq!(loc.source_line, format!("{}…", &line[..120]));
+        let loc = Location::of_span("f", &text, at(1000)..at(2000));
+        assert_eq!(loc.source_line, format!("…{}", &line[880..]));
+        assert_eq!((loc.first_column, loc.underline), (880, 1));
+        // Characters, not bytes.
+        let wide = format!("{}x{}", "é".repeat(300), "é".repeat(300));
+        let loc = Location::of_span("f", &wide, 600..601);
+        assert_eq!((loc.column, loc.first_column), (301, 260));
+        assert_eq!(
+            loc.source_line,
+            format!("…{}x{}…", "é".repeat(40), "é".repeat(79))
+        );
+        // The rendered size no longer depends on the line's length.
+        let diags: Vec<Diagnostic> = (0..1000)
+            .map(|c| {
+                Diagnostic::error("m").with_location(Location::of_span(
+                    "f",
+                    &text,
+                    at(c + 1)..at(c + 2),
+                ))
+            })
+            .collect();
+        assert!(render(&diags).len() < 1000 * 400);
+    }
+
+    #[test]
+    fn control_characters_are_shown_as_pictures_and_carets_stay_aligned() {
+        // A NUL, an escape sequence that would recolour the terminal, a carriage return.
+        let text = "a = \"x\0y\"\nb = \"\x1b[31mred\r!\"\n";
+        let span = text.find('\0').unwrap_or(0);
+        let nul = Diagnostic::error("invalid basic string")
+            .with_location(Location::of_span("f.toml", text, span..span + 1))
+            .with_label("here");
+        let span = text.find('!').unwrap_or(0);
+        let after =
+            Diagnostic::error("m").with_location(Location::of_span("f.toml", text, span..span + 1));
+        let out = render(&[nul, after]);
+        assert!(
+            out.contains(&format!("1 | a = \"x␀y\"\n  | {}^ here\n", " ".repeat(6))),
+            "{out}"
+        );
+        assert!(
+            out.contains(&format!(
+                "2 | b = \"␛[31mred␍!\"\n  | {}^\n",
+                " ".repeat(14)
+            )),
+            "{out}"
+        );
+        assert!(!out.chars().any(|c| c.is_control() && c != '\n'), "{out:?}");
+    }
+
+    #[test]
+    fn invisible_characters_are_escaped_in_lines_and_messages() {
+        // A right-to-left override would display the rest of the line reversed.
+        let text = "k = \"\u{202e}abc\" # \u{200b}x";
+        let span = text.find('x').unwrap_or(0);
+        let diag = Diagnostic::error("unknown key `a\u{0}b`")
+            .with_location(Location::of_span("f", text, span..span + 1))
+            .with_label("label\u{7}")
+            .with_help("help\u{1b}");
+        let out = render(&[diag]);
+        assert!(out.starts_with("error: unknown key `a␀b`\n"), "{out}");
+        assert!(
+            out.contains(&format!(
+                "1 | k = \"\\u{{202e}}abc\" # \\u{{200b}}x\n  | {}^ label␇\n",
+                " ".repeat(28)
+            )),
+            "{out}"
+        );
+        assert!(out.contains("= help: help␛\n"), "{out}");
+        assert!(
+            !out.contains('\u{202e}') && !out.contains('\u{200b}'),
+            "{out:?}"
+        );
     }
 
     #[test]

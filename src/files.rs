@@ -5,15 +5,21 @@
 //! A written file is recognised later by its size and modification time, as cargo does for
 //! its outputs: hashing a 300 MB mesh on every warm build would cost more than the build.
 //! (Cache keys never involve times; this only decides whether a file must be written again.)
+//!
+//! Also the checks on the files the command line names: an input is read only if it is a
+//! regular file ([`read_input`]); a file the user names for output (`--report FILE`, `sdf -o
+//! FILE`) goes into an existing directory, never over a device ([`output_problem`]), and a
+//! report never over the manifest or its inputs ([`check_report_path`]).
 
-use std::fs::{self, File};
-use std::io::{self, Seek, SeekFrom, Write};
+use std::fs::{self, File, OpenOptions};
+use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::deferred_free::Deferred;
 use crate::direct_file::DirectFile;
+use crate::interrupt::Temporary;
 use crate::stages::{OutputSink, PendingFile, WrittenFile};
 
 /// Writes output files under one directory. The big files they replace are freed later
@@ -41,7 +47,7 @@ impl OutputDir {
 /// name, so the rename only drops a name, and its data is freed through `replaced`: deleting
 /// gigabytes waits for the disk (0.4 s for a 2.2 GB STL on a `discard` mount).
 fn replace(temp: &Path, path: &Path, replaced: &Deferred) -> io::Result<()> {
-    let old = temporary_beside(path)?;
+    let (old, _registered) = temporary_beside(path);
     // Fails when there is no old file (or no hard links here): then there is nothing to free.
     let kept = fs::hard_link(path, &old).is_ok();
     let renamed = fs::rename(temp, path);
@@ -50,6 +56,84 @@ fn replace(temp: &Path, path: &Path, replaced: &Deferred) -> io::Result<()> {
         replaced.free(old);
     }
     renamed
+}
+
+/// What a file that is not a regular file is, for messages (symlinks already followed).
+fn not_regular(meta: &fs::Metadata) -> Option<&'static str> {
+    let kind = meta.file_type();
+    if kind.is_file() {
+        return None;
+    }
+    if kind.is_dir() {
+        return Some("a directory");
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if kind.is_fifo() {
+            return Some("a FIFO (named pipe)");
+        }
+        if kind.is_char_device() {
+            return Some("a character device");
+        }
+        if kind.is_block_device() {
+            return Some("a block device");
+        }
+        if kind.is_socket() {
+            return Some("a socket");
+        }
+    }
+    Some("not a regular file")
+}
+
+fn not_regular_error(kind: &str) -> io::Error {
+    let text = if kind.starts_with("not ") {
+        format!("it is {kind}")
+    } else {
+        format!("it is {kind}, not a regular file")
+    };
+    io::Error::new(io::ErrorKind::InvalidInput, text)
+}
+
+/// Why `path` cannot be read as an input, if it cannot: it does not exist (the OS's words) or
+/// is not a regular file. Inputs are checked before a build; their bytes are read by it.
+pub fn input_problem(path: &Path) -> Option<String> {
+    match fs::metadata(path) {
+        Ok(meta) => not_regular(&meta).map(|kind| not_regular_error(kind).to_string()),
+        Err(e) => Some(e.to_string()),
+    }
+}
+
+/// The bytes of the regular file at `path`. Anything else is refused: a FIFO would block the
+/// read until another process wrote to it (forever, if none does), a device like `/dev/zero`
+/// never ends, and `/dev/null` would read as an empty manifest. The type is checked before
+/// opening (so a device is never opened) and again on the opened file, which is opened
+/// non-blocking on Unix, so a FIFO put in its place in between is refused, not waited on.
+pub fn read_input(path: &Path) -> io::Result<Vec<u8>> {
+    if let Some(kind) = not_regular(&fs::metadata(path)?) {
+        return Err(not_regular_error(kind));
+    }
+    let mut options = OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        options.custom_flags(libc::O_NONBLOCK);
+    }
+    let mut file = options.open(path)?;
+    let meta = file.metadata()?;
+    if let Some(kind) = not_regular(&meta) {
+        return Err(not_regular_error(kind));
+    }
+    let mut bytes = Vec::with_capacity(usize::try_from(meta.len()).unwrap_or(0));
+    file.read_to_end(&mut bytes)?;
+    Ok(bytes)
+}
+
+/// [`read_input`] as UTF-8 text.
+pub fn read_input_text(path: &Path) -> io::Result<String> {
+    String::from_utf8(read_input(path)?)
+        .map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.utf8_error()))
 }
 
 /// A writer that counts what passes through it.
@@ -81,32 +165,207 @@ pub fn modified_ns(path: &Path) -> Option<u64> {
     u64::try_from(since.as_nanos()).ok()
 }
 
-/// A fresh temporary name beside `path` (whose directory is created).
-fn temporary_beside(path: &Path) -> io::Result<PathBuf> {
+/// Between an output's name and the writer's pid in a temporary name:
+/// `.NAME.EXT.tmp-PID-COUNTER`.
+const TEMP_INFIX: &str = ".tmp-";
+
+/// The pid in a temporary output name, if `name` is one.
+fn temporary_owner(name: &str) -> Option<u32> {
+    let rest = name.strip_prefix('.')?;
+    let (_, tail) = rest.rsplit_once(TEMP_INFIX)?;
+    let (pid, counter) = tail.split_once('-')?;
+    counter.parse::<u64>().ok()?;
+    pid.parse().ok()
+}
+
+/// Whether process `pid` is running (on this machine). Where that cannot be told, it is
+/// assumed to be, so a file that might still be written is never removed.
+fn process_alive(pid: u32) -> bool {
+    #[cfg(unix)]
+    {
+        let Ok(pid) = libc::pid_t::try_from(pid) else {
+            return true;
+        };
+        // SAFETY: signal 0 performs only the existence and permission check.
+        let rc = unsafe { libc::kill(pid, 0) };
+        rc == 0 || io::Error::last_os_error().raw_os_error() != Some(libc::ESRCH)
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = pid;
+        true
+    }
+}
+
+/// Removes the temporary output files in `dirs` left by processes that are gone (a build
+/// killed with `kill -9`, or a crash): an interrupted build removes its own, but nothing can
+/// run after SIGKILL. Returns the files removed. Another live build's files are kept, even
+/// one of another manifest sharing the directory.
+pub fn sweep_stale_temporaries(dirs: &[PathBuf]) -> Vec<PathBuf> {
+    let mut removed = Vec::new();
+    for dir in dirs {
+        let Ok(entries) = fs::read_dir(dir) else {
+            continue;
+        };
+        for entry in entries.flatten() {
+            let name = entry.file_name();
+            let Some(pid) = name.to_str().and_then(temporary_owner) else {
+                continue;
+            };
+            let is_file = entry.file_type().is_ok_and(|t| t.is_file());
+            if is_file && pid != std::process::id() && !process_alive(pid) {
+                let path = entry.path();
+                if fs::remove_file(&path).is_ok() {
+                    removed.push(path);
+                }
+            }
+        }
+    }
+    removed
+}
+
+/// A fresh temporary name beside `path`, registered for removal should the process be
+/// interrupted while the returned entry lives.
+fn temporary_beside(path: &Path) -> (PathBuf, Temporary) {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    fs::create_dir_all(dir)?;
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    Ok(dir.join(format!(
-        ".{name}.tmp-{}-{}",
+    let temp = directory_of(path).join(format!(
+        ".{name}{TEMP_INFIX}{}-{}",
         std::process::id(),
         COUNTER.fetch_add(1, Ordering::Relaxed)
-    )))
+    ));
+    let registered = Temporary::register(&temp);
+    (temp, registered)
 }
 
-/// Writes `path` atomically from `fill`: a temporary file beside it, renamed on success and
-/// removed on failure. Returns the size of what was written.
+/// Creates the directory of `path` (the output directory, which the build owns).
+fn create_directory_of(path: &Path) -> io::Result<()> {
+    fs::create_dir_all(directory_of(path))
+}
+
+/// Writes `path` atomically from `fill`: a temporary file beside it (its directory created),
+/// renamed on success and removed on failure. Returns the size of what was written.
 pub fn write_atomically(
     path: &Path,
     fill: &mut dyn FnMut(&mut dyn Write) -> io::Result<()>,
 ) -> io::Result<u64> {
+    create_directory_of(path)?;
     write_replacing(path, fill, None)
+}
+
+/// Writes a file the user named on the command line (`--report FILE`, `sdf -o FILE`)
+/// atomically, like [`write_atomically`], but never creates its directory nor replaces what
+/// is not a regular file: see [`output_problem`].
+pub fn write_user_file(
+    path: &Path,
+    fill: &mut dyn FnMut(&mut dyn Write) -> io::Result<()>,
+) -> io::Result<u64> {
+    if let Some(problem) = output_problem(path) {
+        return Err(io::Error::new(io::ErrorKind::InvalidInput, problem));
+    }
+    write_replacing(path, fill, None)
+}
+
+/// The directory of a file named on the command line, when it is not an existing directory
+/// (as a message). Such a directory is not created, as a compiler's `-o` creates none: a typo
+/// must not leave directories behind (`--report /tmpp/r.json` once made `/tmpp`).
+pub fn missing_directory(path: &Path) -> Option<String> {
+    let dir = directory_of(path);
+    match fs::metadata(dir) {
+        Ok(meta) if meta.is_dir() => None,
+        Ok(_) => Some(format!("`{}` is not a directory", dir.display())),
+        Err(e) if e.kind() == io::ErrorKind::NotFound => {
+            Some(format!("the directory `{}` does not exist", dir.display()))
+        }
+        Err(e) => Some(format!("cannot use the directory `{}`: {e}", dir.display())),
+    }
+}
+
+/// The directory `path` is in (`.` for a bare name).
+fn directory_of(path: &Path) -> &Path {
+    path.parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+}
+
+/// Whether two existing paths are the same file, links followed: the same device and inode
+/// on Unix, the same canonical path elsewhere.
+fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        match (fs::metadata(a), fs::metadata(b)) {
+            (Ok(a), Ok(b)) => (a.dev(), a.ino()) == (b.dev(), b.ino()),
+            _ => false,
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        match (fs::canonicalize(a), fs::canonicalize(b)) {
+            (Ok(a), Ok(b)) => a == b,
+            _ => false,
+        }
+    }
+}
+
+/// Why a file named on the command line cannot be written, if it cannot: its directory is
+/// missing ([`missing_directory`]), or the name exists as something other than a regular
+/// file. The file is renamed into place, so over `/dev/stdout` it would replace the device's
+/// name, and over a FIFO its reader would never see it.
+pub fn output_problem(path: &Path) -> Option<String> {
+    if let Some(problem) = missing_directory(path) {
+        return Some(problem);
+    }
+    let meta = fs::metadata(path).ok()?;
+    not_regular(&meta).map(|kind| format!("it is {kind}"))
+}
+
+/// Checks `--report FILE` (`-` is stdout) before anything is built, so that a bad name fails
+/// at once rather than after the build, as a usage error (exit 2) with the rendered text:
+/// FILE must be writable ([`output_problem`]: its directory exists, it is not a device), and
+/// it must not be the manifest or a file the manifest reads, which the report would replace.
+pub fn check_report_path(
+    report: Option<&str>,
+    manifest: &crate::manifest::Manifest,
+) -> Result<(), String> {
+    let file = match report {
+        None | Some("-") => return Ok(()),
+        Some(file) => file,
+    };
+    let refuse = |why: String, help: &str| {
+        Err(format!(
+            "error: cannot write the report to `{file}`: {why}\n  = help: {help}\n"
+        ))
+    };
+    let path = Path::new(file);
+    if file.is_empty() || path.file_name().is_none() {
+        return refuse(
+            "that is not a file name".into(),
+            "name a file, like `--report report.json`, or `-` for stdout",
+        );
+    }
+    if let Some(problem) = output_problem(path) {
+        let help = if missing_directory(path).is_some() {
+            "create it first: `--report` does not create directories"
+        } else {
+            "name a regular file, or give `--report -` to print the report"
+        };
+        return refuse(problem, help);
+    }
+    let another = "name another file for the report, like `report.json`";
+    if same_file(path, &manifest.path) {
+        return refuse("it is the manifest".into(), another);
+    }
+    if let Some(input) = manifest.inputs.iter().find(|i| same_file(path, i)) {
+        return refuse(
+            format!("it is `{}`, a file the manifest reads", input.display()),
+            another,
+        );
+    }
+    Ok(())
 }
 
 /// [`write_atomically`], the old file freed through `replaced` when given.
@@ -115,7 +374,7 @@ fn write_replacing(
     fill: &mut dyn FnMut(&mut dyn Write) -> io::Result<()>,
     replaced: Option<&Deferred>,
 ) -> io::Result<u64> {
-    let temp = temporary_beside(path)?;
+    let (temp, _registered) = temporary_beside(path);
     let result = (|| {
         let file = File::create(&temp)?;
         let mut writer = CountingWriter {
@@ -145,17 +404,20 @@ impl OutputSink for OutputDir {
         fill: &mut dyn FnMut(&mut dyn Write) -> io::Result<()>,
     ) -> io::Result<(u64, u64)> {
         let path = self.dir.join(relative);
+        create_directory_of(&path)?;
         let bytes = write_replacing(&path, fill, Some(&self.replaced))?;
         Ok((bytes, modified_ns(&path).unwrap_or(0)))
     }
 
     fn begin_file(&self, relative: &str) -> io::Result<Box<dyn PendingFile>> {
         let path = self.dir.join(relative);
-        let temp = temporary_beside(&path)?;
+        create_directory_of(&path)?;
+        let (temp, registered) = temporary_beside(&path);
         let file = File::create(&temp)?;
         Ok(Box::new(PendingOutput {
             writer: Some(DirectFile::new(file, &temp)),
             temp,
+            _registered: registered,
             path,
             replaced: Arc::clone(&self.replaced),
         }))
@@ -174,6 +436,8 @@ struct PendingOutput {
     /// `None` once committed.
     writer: Option<DirectFile>,
     temp: PathBuf,
+    /// Dropped after `Drop::drop` has removed an uncommitted file.
+    _registered: Temporary,
     path: PathBuf,
     replaced: Arc<Deferred>,
 }

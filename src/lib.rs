@@ -1,6 +1,7 @@
 //! latticebuild: a TOML manifest of unit cells and outputs, compiled into a DAG of cached
 //! stages that produce watertight lattice meshes. See `docs/ARCHITECTURE.md` for the map.
 
+pub mod budget;
 pub mod build;
 pub mod cache;
 pub mod cli;
@@ -10,6 +11,7 @@ pub mod direct_file;
 pub mod files;
 pub mod graph;
 pub mod inspect;
+pub mod interrupt;
 pub mod manifest;
 pub mod progress;
 pub mod report;

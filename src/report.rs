@@ -54,6 +54,13 @@ pub struct Report {
     pub bbox: Bbox,
     pub files: Vec<String>,
     pub stages: Vec<StageReport>,
+    /// What is wrong with the mesh (not closed, not manifold); empty for a good one. A build
+    /// with a defective output fails unless the user allowed defects.
+    pub defects: Vec<String>,
+    /// The estimate made before the build (peak memory, bytes written, triangles), against
+    /// which it was allowed to run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub estimate: Option<crate::budget::Estimate>,
 }
 
 impl Report {
@@ -71,7 +78,10 @@ impl Report {
                 (0..3).map(|a| max[a] - min[a]).product()
             }),
         };
+        let planar = result.written.planar_element_area.is_some();
         Report {
+            defects: defects(s.watertight, s.manifold, planar),
+            estimate: None,
             name: result.name.clone(),
             triangles: s.triangles,
             vertices: s.vertices,
@@ -85,7 +95,7 @@ impl Report {
                 Some(element_area) => s.area / element_area,
                 None => s.volume / domain_volume,
             },
-            planar: result.written.planar_element_area.is_some(),
+            planar,
             sdf_box: result.written.domain.map(|[min, max]| Bbox { min, max }),
             tiling: result.written.tiling.clone(),
             thinnest_wall: result.written.shell.as_ref().and_then(|s| s.thinnest_wall),
@@ -161,5 +171,37 @@ impl Report {
             seconds,
             self.stages.len()
         )
+    }
+}
+
+/// The defects a mesh's check found: a solid must be closed and manifold, a planar region
+/// (open by nature) manifold.
+fn defects(watertight: bool, manifold: bool, planar: bool) -> Vec<String> {
+    let mut found = Vec::new();
+    if !watertight && !planar {
+        found.push("the mesh is not watertight: some edges are used by one triangle only".into());
+    }
+    if !manifold {
+        found.push(
+            "the mesh is not manifold: some edges are used by more than two triangles, or \
+             some vertices join separate fans"
+                .into(),
+        );
+    }
+    found
+}
+
+#[cfg(test)]
+mod tests {
+    use super::defects;
+
+    #[test]
+    fn a_solid_must_be_closed_and_manifold_a_planar_region_manifold() {
+        assert!(defects(true, true, false).is_empty());
+        assert!(defects(false, true, true).is_empty(), "regions are open");
+        assert_eq!(defects(false, true, false).len(), 1);
+        assert_eq!(defects(true, false, false).len(), 1);
+        assert_eq!(defects(false, false, false).len(), 2);
+        assert!(defects(false, false, true)[0].contains("not manifold"));
     }
 }

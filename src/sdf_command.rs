@@ -13,9 +13,11 @@
 //! written. One summary line on stderr, like the build's.
 //!
 //! Invariant: like the rest of `cli.rs`, this is where files are touched: included files and
-//! `file` meshes are read here (a relative name is relative to the include file naming it),
-//! and the mesh is written to a temporary file renamed into place. Contouring is the `sdf`
-//! stage's (`stages/sdf.rs`), so a program gives the same mesh here and in a manifest.
+//! `file` meshes are read here (a relative name is relative to the include file naming it;
+//! only regular files are read, so a FIFO or a device is an error, not a wait), and the mesh
+//! is written to a temporary file renamed into place, in a directory that must exist.
+//! Contouring is the `sdf` stage's (`stages/sdf.rs`), so a program gives the same mesh here
+//! and in a manifest.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -28,8 +30,9 @@ use latticebuild_geom::sdf::{
 };
 
 use super::Failure;
+use crate::budget;
 use crate::build::NoProgress;
-use crate::files::write_atomically;
+use crate::files::{output_problem, read_input, read_input_text, write_user_file};
 use crate::stages::sdf::{box_text, contour_field, mesh_field};
 
 /// `file` words' meshes from the filesystem: a path is relative to the include file holding
@@ -40,7 +43,7 @@ impl ExternalSolids for MeshFiles {
     fn resolve(&self, path: &str, from: Option<&str>) -> Result<Arc<dyn ExternalField>, String> {
         let full = relative_to(path, from);
         let shown = full.display().to_string();
-        let bytes = std::fs::read(&full).map_err(|e| format!("cannot read `{shown}`: {e}"))?;
+        let bytes = read_input(&full).map_err(|e| format!("cannot read `{shown}`: {e}"))?;
         mesh_field(&shown, &bytes)
     }
 }
@@ -64,7 +67,7 @@ impl IncludeResolver for FileIncludes {
         let canonical = path
             .canonicalize()
             .map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
-        let text = std::fs::read_to_string(&canonical)
+        let text = read_input_text(&canonical)
             .map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
         Ok(Included {
             id: canonical.display().to_string(),
@@ -79,6 +82,8 @@ struct Options {
     domain: Option<Aabb>,
     output: PathBuf,
     quiet: bool,
+    /// `--allow-large`: contour even what seems too big for the machine.
+    allow_large: bool,
     words: Vec<Word>,
 }
 
@@ -93,6 +98,7 @@ impl Options {
             domain: None,
             output: PathBuf::from("out.ply"),
             quiet: false,
+            allow_large: false,
             words: Vec::new(),
         };
         let mut it = words.into_iter();
@@ -107,6 +113,10 @@ impl Options {
                 "-o" | "--output" => "-o",
                 "-q" | "--quiet" => {
                     options.quiet = true;
+                    continue;
+                }
+                "--allow-large" => {
+                    options.allow_large = true;
                     continue;
                 }
                 _ => {
@@ -165,14 +175,39 @@ fn command(args: &[String]) -> Result<(), Failure> {
     let words = sdf::expand(args, &FileIncludes).map_err(usage)?;
     let options = Options::extract(words)?;
     let format = output_format(&options.output)?;
+    // Checked before contouring, which may take minutes: the directory is not created.
+    if let Some(problem) = output_problem(&options.output) {
+        return Err(usage(format_args!(
+            "cannot write `{}`: {problem}",
+            options.output.display()
+        )));
+    }
     let program = Program::parse(&options.words).map_err(usage)?;
     let field = program.field(&MeshFiles).map_err(usage)?;
     let shown = options.output.display();
+    let domain = options.domain.unwrap_or_else(|| field.domain());
+    if !options.allow_large {
+        let estimate = budget::box_estimate(
+            "-s",
+            [domain.min, domain.max],
+            options.samples,
+            &[format],
+            Encoding::Binary,
+        );
+        let machine = budget::Machine::probe(options.output.parent().unwrap_or(Path::new(".")));
+        let refused = budget::refusals(&[(shown.to_string(), estimate)], machine);
+        if !refused.is_empty() {
+            return Err(usage(format_args!(
+                "{}\n  = help: fewer samples with `-s`, or `--allow-large` to contour anyway",
+                refused.join("\nerror: ")
+            )));
+        }
+    }
     let samples = |_: &Aabb| Ok(options.samples);
-    let contoured = contour_field(&field, options.domain, &samples, &NoProgress)
+    let contoured = contour_field(&field, Some(domain), &samples, &NoProgress)
         .map_err(|e| Failure::Build(format!("{e}: `{shown}` was not written")))?;
     let (mesh, check, domain) = (&contoured.mesh, &contoured.check, &contoured.domain);
-    write_atomically(&options.output, &mut |w| {
+    write_user_file(&options.output, &mut |w| {
         mesh_io::write_mesh(mesh, format, Encoding::Binary, w)
     })
     .map_err(|e| Failure::Build(format!("cannot write `{shown}`: {e}")))?;

@@ -5,6 +5,8 @@
 mod common;
 
 use common::{Project, ran, sphere_stl};
+use latticebuild_geom::mesh::Mesh;
+use latticebuild_geom::{mesh_read, validate};
 use std::f64::consts::PI;
 
 /// A gyroid in a sphere of radius 10 (`ball.stl`), over the sphere's box.
@@ -188,4 +190,28 @@ fn bad_mesh_files_are_errors_naming_the_file() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("cannot read `missing.stl`"), "{err}");
     assert!(err.contains("line"), "{err}");
+}
+
+/// `examples/mesh_inputs.toml`'s struts (a mesh cell whose struts end in caps on the cell's
+/// faces) come out as one body over 3 × 3 × 3 cells: the caps of neighbouring copies meet
+/// and bound nothing, so there is no gap at the cell faces.
+#[test]
+fn the_example_struts_are_one_connected_body() {
+    let examples = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let manifest = std::fs::read_to_string(examples.join("mesh_inputs.toml")).expect("example");
+    let p = Project::new(&manifest);
+    common::copy_dir(&examples.join("meshes"), &p.path().join("meshes"), &[]);
+    let reports = p.build(&["--set", "outputs.struts.formats=[\"ply\"]", "struts"]);
+    let r = &reports[0];
+    assert_eq!(
+        (r["watertight"].clone(), r["manifold"].clone()),
+        (true.into(), true.into())
+    );
+    let bytes = std::fs::read(p.out("struts.ply")).expect("struts.ply");
+    let soup = mesh_read::read(&bytes, mesh_read::Format::Ply).expect("PLY");
+    let mesh = Mesh {
+        vertices: soup.positions.iter().map(|p| p.map(|c| c as f32)).collect(),
+        triangles: soup.triangles,
+    };
+    assert_eq!(validate::components(&mesh), 1);
 }

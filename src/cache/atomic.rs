@@ -13,6 +13,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::cache::error::CacheError;
+use crate::interrupt::Temporary;
 
 /// Every temporary file starts with this. It begins with a dot, so it can never be mistaken for
 /// an object (64 hex digits) or a record (escaped names never start with a dot).
@@ -47,14 +48,18 @@ pub(crate) fn temp_owner_pid(name: &str) -> Option<u32> {
 pub(crate) struct TempFile {
     path: PathBuf,
     persisted: bool,
+    /// Dropped after `Drop::drop` has removed an unpersisted file.
+    _registered: Temporary,
 }
 
 impl TempFile {
     /// A new, empty temporary file beside `destination`, opened for reading and writing.
     pub(crate) fn beside(destination: &Path) -> Result<(TempFile, File), CacheError> {
         let dir = destination.parent().unwrap_or(Path::new("."));
+        let path = dir.join(temp_name());
         let temp = TempFile {
-            path: dir.join(temp_name()),
+            _registered: Temporary::register(&path),
+            path,
             persisted: false,
         };
         let file = OpenOptions::new()

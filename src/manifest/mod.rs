@@ -12,7 +12,8 @@
 //!   validation, since a recovered tree would only add errors that are not really there.
 //! - Every diagnostic cites a place (file, line, column, the line's text), computed when it is
 //!   made; overridden values are shown in their `--set` argument.
-//! - [`load`] reads the one manifest file; nothing else here does IO, and nothing does geometry.
+//! - [`load`] reads the one manifest file (a regular file of UTF-8 text) and checks that the
+//!   files it names are regular files; nothing else here does IO, and nothing does geometry.
 //! - No input makes this module panic.
 
 use std::path::Path;
@@ -30,13 +31,19 @@ mod source;
 mod tests;
 
 pub use model::*;
+pub use schema::output_files::output_dirs;
 
 use source::{Report, Sources};
 
-/// Reads and validates the manifest at `path`, with `--set` overrides applied.
+/// Reads and validates the manifest at `path`, with `--set` overrides applied. The manifest
+/// must be a regular file (`/dev/null` or a FIFO is refused before anything is made next to
+/// it) of UTF-8 text (the first byte that is not is shown at its line and column).
 pub fn load(path: &Path, overrides: &[String]) -> Result<Manifest, Vec<Diagnostic>> {
-    match std::fs::read_to_string(path) {
-        Ok(text) => {
+    match crate::files::read_input(path) {
+        Ok(bytes) => {
+            let name = path.display().to_string();
+            let text = String::from_utf8(bytes)
+                .map_err(|e| vec![source::not_utf8(&name, e.as_bytes(), e.utf8_error())])?;
             let manifest = parse(&text, path, overrides)?;
             check_input_files(&manifest, &text, path, overrides)?;
             Ok(manifest)
@@ -52,7 +59,7 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Manifest, Vec<Diagnosti
     }
 }
 
-/// Every mesh or crystal file the manifest names must be a readable file: one error per missing file,
+/// Every mesh or crystal file the manifest names must be a regular file: one error per missing file,
 /// pointing at where it is named. (Its contents are read, and checked, by the build.)
 fn check_input_files(
     manifest: &Manifest,
@@ -92,10 +99,8 @@ fn check_input_files(
                 }),
         );
     for (key, file, kind) in named {
-        let problem = match std::fs::metadata(&file.path) {
-            Ok(meta) if meta.is_file() => continue,
-            Ok(_) => "it is not a file".to_string(),
-            Err(err) => err.to_string(),
+        let Some(problem) = crate::files::input_problem(&file.path) else {
+            continue;
         };
         let diag = Diagnostic::error(format!(
             "cannot read the {kind} `{}` of `{key}`",
@@ -117,6 +122,9 @@ fn check_input_files(
 
 /// Validates manifest `text`, with `--set` overrides applied. `path` is shown in diagnostics
 /// as given, and locates the manifest's directory (`root`) and its `out_dir`; it is not read.
+/// How many TOML syntax errors a failed parse shows.
+const SHOWN_SYNTAX_ERRORS: usize = 10;
+
 pub fn parse(text: &str, path: &Path, overrides: &[String]) -> Result<Manifest, Vec<Diagnostic>> {
     let sources = Sources::new(path.display().to_string(), text, overrides);
     let mut report = Report::new(&sources);
@@ -124,12 +132,26 @@ pub fn parse(text: &str, path: &Path, overrides: &[String]) -> Result<Manifest, 
 
     let (tree, syntax_errors) = DeTable::parse_recoverable(text);
     if !syntax_errors.is_empty() {
-        for err in syntax_errors {
-            let span = err.span().unwrap_or(0..0);
-            report.at(
-                &span,
-                Diagnostic::error("invalid TOML").with_label(err.message().replace('\n', ", ")),
-            );
+        // The parser's recovery can report an error per line of a broken file (18000 for one
+        // unclosed quote); the first few are the useful ones, and locating each costs a scan.
+        let mut errors: Vec<_> = syntax_errors
+            .iter()
+            .map(|e| (e.span().unwrap_or(0..0), e.message()))
+            .collect();
+        errors.sort_by_key(|(span, _)| span.start);
+        let hidden = errors.len().saturating_sub(SHOWN_SYNTAX_ERRORS);
+        errors.truncate(SHOWN_SYNTAX_ERRORS);
+        let last = errors.len() - 1;
+        for (i, (span, message)) in errors.into_iter().enumerate() {
+            let mut diag =
+                Diagnostic::error("invalid TOML").with_label(message.replace('\n', ", "));
+            if i == last && hidden > 0 {
+                diag = diag.with_note(format!(
+                    "{hidden} more syntax errors follow; fix these first, later ones often \
+                     come from them"
+                ));
+            }
+            report.at(&span, diag);
         }
         return Err(report.finish());
     }

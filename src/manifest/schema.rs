@@ -30,6 +30,8 @@ use crate::diagnostics::Diagnostic;
 mod crystals;
 #[path = "meshes.rs"]
 mod meshes;
+#[path = "output_files.rs"]
+pub(crate) mod output_files;
 #[path = "scaffolds.rs"]
 mod scaffolds;
 #[path = "sdf.rs"]
@@ -233,7 +235,7 @@ pub(crate) fn validate(
     inputs.extend(scaffolds::scaffold_files(&scaffolds));
     inputs.sort();
     inputs.dedup();
-    Some(Manifest {
+    let manifest = Manifest {
         path: manifest_path.to_path_buf(),
         out_dir,
         root: dir,
@@ -243,7 +245,9 @@ pub(crate) fn validate(
         sdf_outputs,
         scaffolds,
         tiled_outputs,
-    })
+    };
+    output_files::check_collisions(&manifest, outputs_table, checker.report);
+    Some(manifest)
 }
 
 /// The fields of one table that the schema knows, by their schema name.

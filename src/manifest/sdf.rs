@@ -337,14 +337,15 @@ impl Checker<'_, '_, '_> {
                     }
                 };
                 match lang::parse_samples(&total) {
-                    Ok(counts) if counts.iter().all(|&n| n <= MAX_PER_AXIS) => {
-                        Some(SdfResolution::Counts(counts))
-                    }
-                    Ok(_) => {
+                    Ok(counts) => Some(SdfResolution::Counts(counts)),
+                    Err(lang::OptionError::TooManySamples { count, axis, .. }) => {
                         self.error(
                             v.span(),
                             &format!("`{key}` is too large"),
-                            &format!("more than {MAX_PER_AXIS} samples along an axis"),
+                            &format!(
+                                "{count} samples along {}, more than {MAX_PER_AXIS}",
+                                ["x", "y", "z"][axis]
+                            ),
                             None,
                         );
                         None
@@ -399,3 +400,5 @@ fn formula_start(text: &str, range: &Range<usize>, w: &str) -> Option<usize> {
 }
 
 const MAX_PER_AXIS: usize = super::super::model::MAX_SAMPLES_PER_AXIS;
+// `-s` text is checked by the geometry crate against its own limit: the two must agree.
+const _: () = assert!(MAX_PER_AXIS == lang::MAX_SAMPLES_PER_AXIS);

@@ -154,6 +154,31 @@ fn samples_are_totals_counts_or_a_voxel() {
 }
 
 #[test]
+fn samples_past_100000_per_axis_are_too_large_in_every_form() {
+    for (samples, label) in [
+        ("\"100001^3\"", "100001 samples along x, more than 100000"),
+        (
+            "1000030000300001",
+            "100001 samples along x, more than 100000",
+        ),
+        ("\"3,200000,3\"", "200000 samples along y, more than 100000"),
+        (
+            "\"3,3,4294967297\"",
+            "4294967297 samples along z, more than 100000",
+        ),
+    ] {
+        let text = format!("[outputs.s]\nsdf = \"ball\"\nsamples = {samples}\n");
+        let rendered = render_errors(&text, &[]);
+        let expected = format!(
+            "error: `outputs.s.samples` is too large\n --> lattice.toml:3:11\n  |\n\
+             3 | samples = {samples}\n  |           {} {label}\n",
+            "^".repeat(samples.chars().count())
+        );
+        assert!(rendered.starts_with(&expected), "{rendered}");
+    }
+}
+
+#[test]
 fn set_replaces_the_program_and_its_samples() {
     let manifest = parse_ok(
         "[outputs.b]\nsdf = \"ball scale 2\"\nsamples = 1000\n",

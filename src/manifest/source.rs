@@ -7,8 +7,58 @@
 //! of its own). [`Sources::locate`] turns any span back into a file, line and column.
 
 use std::ops::Range;
+use std::str::Utf8Error;
 
 use crate::diagnostics::{Diagnostic, Location};
+
+/// The diagnostic for a manifest that is not UTF-8: where its first invalid byte is (line,
+/// and column in characters, as for any other error), with that line shown and the bytes
+/// that do not decode written as `\xHH`.
+pub(crate) fn not_utf8(name: &str, bytes: &[u8], err: Utf8Error) -> Diagnostic {
+    let at = err.valid_up_to();
+    let bad_len = err.error_len().unwrap_or(bytes.len() - at);
+    let line_start = bytes[..at]
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |i| i + 1);
+    let line_end = bytes[at..]
+        .iter()
+        .position(|&b| b == b'\n')
+        .map_or(bytes.len(), |i| at + i);
+    // Up to `at` the bytes are valid UTF-8 (that is what `valid_up_to` means).
+    let before = String::from_utf8_lossy(&bytes[line_start..at]);
+    let mut source_line = before.to_string();
+    for chunk in bytes[at..line_end].utf8_chunks() {
+        source_line.push_str(chunk.valid());
+        for b in chunk.invalid() {
+            source_line.push_str(&format!("\\x{b:02X}"));
+        }
+    }
+    let source_line = source_line.trim_end_matches('\r').to_string();
+    let shown: Vec<String> = bytes[at..at + bad_len]
+        .iter()
+        .map(|b| format!("0x{b:02X}"))
+        .collect();
+    let label = match shown.len() {
+        1 => format!("byte {} is not UTF-8", shown[0]),
+        _ => format!("bytes {} are not UTF-8", shown.join(" ")),
+    };
+    let location = Location {
+        file: name.to_string(),
+        line: bytes[..at].iter().filter(|&&b| b == b'\n').count() + 1,
+        column: before.chars().count() + 1,
+        source_line,
+        // One diagnostic per file, so the whole line is shown however long.
+        first_column: 1,
+        // Each byte is shown as four characters, `\xHH`.
+        underline: 4 * bad_len,
+    };
+    Diagnostic::error(format!("`{name}` is not UTF-8 text"))
+        .with_location(location)
+        .with_label(label)
+        .with_help("a manifest is TOML, which is UTF-8; save the file as UTF-8")
+        .with_origin(name)
+}
 
 /// The file name shown for values that came from a `--set` argument.
 pub(crate) const OVERRIDE_FILE: &str = "--set";

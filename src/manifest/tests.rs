@@ -1360,3 +1360,82 @@ mod crystal_cells {
 
 #[path = "scaffolds_tests.rs"]
 mod scaffolds_tests;
+
+// ---- outputs writing the same file ------------------------------------------------------------
+
+const TWO_OUTPUTS: &str = "\
+[cells.g]
+tpms = \"gyroid\"
+
+[outputs.b]
+cell = \"g\"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+cell_size = 1
+samples = 8
+
+[outputs.c]
+cell = \"g\"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+cell_size = 1
+samples = 8
+path = \"b\"
+";
+
+#[test]
+fn two_outputs_writing_one_file_is_an_error_naming_both_and_the_file() {
+    let text = render_errors(TWO_OUTPUTS, &[]);
+    assert!(
+        text.contains("outputs `b` and `c` both write `out/b.stl`"),
+        "{text}"
+    );
+    assert!(
+        text.contains("lattice.toml:15:8"),
+        "points at c's path: {text}"
+    );
+}
+
+#[test]
+fn two_spellings_of_one_file_collide_and_different_formats_do_not() {
+    let text = render_errors(TWO_OUTPUTS, &["outputs.c.path=./b"]);
+    assert!(text.contains("both write `out/b.stl`"), "{text}");
+    // `b.stl` and `b.ply` are different files.
+    parse_ok(TWO_OUTPUTS, &["outputs.c.formats=[\"ply\"]"]);
+}
+
+#[test]
+fn a_set_override_cannot_make_outputs_collide() {
+    let separate = TWO_OUTPUTS.replace("path = \"b\"\n", "");
+    parse_ok(&separate, &[]);
+    let text = render_errors(&separate, &["outputs.b.path=c"]);
+    assert!(
+        text.contains("outputs `b` and `c` both write `out/c.stl`"),
+        "{text}"
+    );
+}
+
+/// Found by `cargo xtask fuzz`: one unclosed quote made the parser's recovery report an error
+/// per following line, each located by a scan of the file (18000 errors, over a second).
+#[test]
+fn a_broken_file_shows_its_first_ten_syntax_errors_and_counts_the_rest() {
+    let text = format!(
+        "[cells.u]\nexpr = \"x\nsymmetry = \"Oh\n{}",
+        "symmetry = \" \"p\"\n".repeat(3000)
+    );
+    let rendered = render_errors(&text, &[]);
+    assert_eq!(
+        rendered.matches("error: invalid TOML").count(),
+        10,
+        "{rendered}"
+    );
+    let note = rendered
+        .lines()
+        .find(|l| l.contains("more syntax errors follow"))
+        .expect("the rest are counted");
+    let hidden: usize = note
+        .split_whitespace()
+        .find_map(|w| w.parse().ok())
+        .expect("a count");
+    assert!(hidden > 3000, "{note}");
+    // The ten shown are the first in the file.
+    assert!(rendered.contains("lattice.toml:2:"), "{rendered}");
+}

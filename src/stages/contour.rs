@@ -170,6 +170,9 @@ impl ContourStage {
             .map_err(|e| e.to_string())?;
             (mesh, None)
         };
+        if mesh.is_empty() {
+            return Err(self.why_empty(&*field, part.is_some()));
+        }
         progress.phase("checking the mesh");
         let summary = MeshSummary::from_check(&validate::check(&mesh));
         Ok(MeshArtifact {
@@ -202,6 +205,53 @@ impl ContourStage {
             samples,
             sampled,
         }
+    }
+
+    /// Why the solid came out empty, with the cell's field range over the output's samples,
+    /// so the user sees how far the offset or thickness is from giving a surface. Sampling
+    /// again costs one more pass, but only on this failure path.
+    fn why_empty(&self, field: &dyn ScalarField, within: bool) -> String {
+        let [nx, ny, nz] = self.samples;
+        let (min, max, counts) = if self.planar_domain {
+            (self.domain_min, self.domain_max, [nx, ny, 1])
+        } else {
+            (self.domain_min, self.domain_max, [nx, ny, nz])
+        };
+        let size = if self.over_element {
+            [1.0; 3]
+        } else {
+            self.cell_size
+        };
+        let grid = Grid {
+            origin: std::array::from_fn(|a| min[a] / size[a]),
+            spacing: std::array::from_fn(|a| match counts[a] {
+                1 => 0.0,
+                n => (max[a] - min[a]) / size[a] / (n - 1) as f64,
+            }),
+            counts,
+        };
+        let (low, high) = field_range(field, &grid);
+        let holds = match self.solid {
+            Solid::Inside { offset } => format!("f ≤ {offset}"),
+            Solid::Outside { offset } => format!("f ≥ {offset}"),
+            Solid::Shell { thickness } => format!("|f| ≤ {}", thickness / 2.0),
+            Solid::EccentricShell { offset, thickness } => {
+                format!("|f − {offset}| ≤ {}", thickness / 2.0)
+            }
+        };
+        let part = if within {
+            " (before it is confined to the `within` part; if the field does cross, the \
+             lattice and the part do not overlap)"
+        } else {
+            ""
+        };
+        if low.is_nan() {
+            return "the output is empty: the cell's field is not a number at any sample".into();
+        }
+        format!(
+            "the output is empty: the solid {holds} holds at no sample of the domain; the \
+             cell's field ranges over [{low:.6}, {high:.6}] there{part}"
+        )
     }
 
     /// The region `Φ ≤ 0` of a 2D cell repeated over the rectangle of the domain (model units;
@@ -296,4 +346,27 @@ fn planar_output(region: PlanarRegion, frame: Vec<[f64; 2]>, area: f64) -> (Mesh
         svg: None,
     };
     (region.mesh, Some(planar))
+}
+
+/// The smallest and largest value of `field` on `grid` (NaN samples ignored; both NaN when
+/// every sample is). The planes are reduced in order, so the result does not depend on the
+/// thread count (min and max are exact anyway).
+fn field_range(field: &dyn ScalarField, grid: &Grid) -> (f64, f64) {
+    use rayon::prelude::*;
+    let sampler = field.sampler(grid);
+    let ranges: Vec<(f64, f64)> = (0..grid.counts[2])
+        .into_par_iter()
+        .map(|k| {
+            let mut plane = vec![0.0; grid.plane_len()];
+            sampler.sample_plane(k, &mut plane);
+            plane
+                .iter()
+                .fold((f64::NAN, f64::NAN), |(lo, hi), &v| (lo.min(v), hi.max(v)))
+        })
+        .collect();
+    ranges
+        .into_iter()
+        .fold((f64::NAN, f64::NAN), |(lo, hi), (l, h)| {
+            (lo.min(l), hi.max(h))
+        })
 }

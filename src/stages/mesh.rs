@@ -9,10 +9,13 @@
 //! - A mesh cell's payload is the placed soup, little-endian `f64` positions and `u32` indices
 //!   behind a magic and the sampling mode: a pure function of the file's bytes and the cell's
 //!   keys. Reading errors name the file and the line, byte offset or face of the problem.
+//! - A mesh cell's field is its solid repeated with period 1 (the union of the copies, by the
+//!   geometry crate's `PeriodicMeshSdf`): continuous across cell faces, where the nearest
+//!   surface may be a neighbouring copy's and a strut's end caps meet the next cell's.
 
 use latticebuild_geom::field::ScalarField;
 use latticebuild_geom::mesh_read::{self, Format, TriangleSoup};
-use latticebuild_geom::mesh_sdf::{MeshSdf, Mode, SdfOptions};
+use latticebuild_geom::mesh_sdf::{MeshSdf, Mode, PeriodicMeshSdf, SdfOptions};
 
 use crate::cache::KeyBuilder;
 use crate::manifest::{MeshCell, MeshSampling};
@@ -168,7 +171,8 @@ fn decode(payload: &[u8]) -> Result<(TriangleSoup, MeshSampling), String> {
 }
 
 /// The field of a mesh cell's payload, repeated with period 1 (the cell is the unit cube
-/// centred at the origin, like every cell).
+/// centred at the origin, like every cell): the signed distance to the union of the mesh's
+/// periodic copies (or its containment), continuous across the cell's faces.
 pub fn mesh_cell_field(payload: &[u8]) -> Result<Box<dyn ScalarField>, String> {
     let (soup, sampling) = decode(payload)?;
     let options = SdfOptions {
@@ -178,18 +182,8 @@ pub fn mesh_cell_field(payload: &[u8]) -> Result<Box<dyn ScalarField>, String> {
         },
         ..SdfOptions::default()
     };
-    let sdf = MeshSdf::new(&soup, options).map_err(|e| format!("the cell's mesh: {e}"))?;
-    Ok(Box::new(Periodic(sdf)))
-}
-
-/// A field repeated with period 1 on every axis around the cell `[-½, ½]³`.
-struct Periodic<F>(F);
-
-impl<F: ScalarField> ScalarField for Periodic<F> {
-    fn eval_points(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
-        let wrap = |v: &[f64]| -> Vec<f64> { v.iter().map(|c| c - c.round()).collect() };
-        self.0.eval_points(&wrap(xs), &wrap(ys), &wrap(zs), out);
-    }
+    let sdf = PeriodicMeshSdf::new(&soup, options).map_err(|e| format!("the cell's mesh: {e}"))?;
+    Ok(Box::new(sdf))
 }
 
 /// The part of `within`: its signed distance in model units, exact within `band` of the
@@ -201,4 +195,192 @@ pub fn part_sdf(given: &str, bytes: &[u8], band: f64) -> Result<MeshSdf, String>
         ..SdfOptions::default()
     };
     MeshSdf::new(&soup, options).map_err(|e| format!("the part `{given}`: {e}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use latticebuild_geom::expr;
+    use latticebuild_geom::field::Grid;
+
+    /// A UV sphere (every vertex on the sphere) as a soup, counter-clockwise from outside.
+    fn sphere(centre: [f64; 3], radius: f64, rings: usize, segments: usize) -> TriangleSoup {
+        let point = |i: usize, j: usize| -> [f64; 3] {
+            let theta = std::f64::consts::PI * i as f64 / rings as f64;
+            let phi = std::f64::consts::TAU * (j % segments) as f64 / segments as f64;
+            let (s, c) = (theta.sin(), theta.cos());
+            // Poles exact, so that the surface closes.
+            let s = if i == 0 || i == rings { 0.0 } else { s };
+            [
+                centre[0] + radius * s * phi.cos(),
+                centre[1] + radius * s * phi.sin(),
+                centre[2] + radius * c,
+            ]
+        };
+        let mut soup = TriangleSoup {
+            positions: Vec::new(),
+            triangles: Vec::new(),
+        };
+        for i in 0..rings {
+            for j in 0..segments {
+                let quad = [
+                    point(i, j),
+                    point(i + 1, j),
+                    point(i + 1, j + 1),
+                    point(i, j + 1),
+                ];
+                for [a, b, c] in [[0, 1, 2], [0, 2, 3]] {
+                    let n = soup.positions.len() as u32;
+                    soup.positions.extend([quad[a], quad[b], quad[c]]);
+                    soup.triangles.push([n, n + 1, n + 2]);
+                }
+            }
+        }
+        soup
+    }
+
+    /// The field sampled plane by plane on `grid`, as the contour stage samples it.
+    fn sample(field: &dyn ScalarField, grid: &Grid) -> Vec<f64> {
+        let sampler = field.sampler(grid);
+        let plane = grid.plane_len();
+        let mut out = vec![0.0; plane * grid.counts[2]];
+        for (k, chunk) in out.chunks_mut(plane).enumerate() {
+            sampler.sample_plane(k, chunk);
+        }
+        out
+    }
+
+    const CENTRE: [f64; 3] = [0.27, 0.1, -0.06];
+    const RADIUS: f64 = 0.3;
+
+    /// An off-centre ball that crosses the cell's +x face, as a mesh cell and as the
+    /// expression of its periodic copies' signed distance (the balls are disjoint, so the
+    /// least of their distances is the union's, inside too), on a grid over the whole cell,
+    /// both faces of every axis included. The facets lie inside the ball and outside the
+    /// ball of their least distance to the centre, `r_in`, so the mesh's field lies between
+    /// the two balls' fields: `0 ≤ mesh − expression ≤ r − r_in`.
+    #[test]
+    fn a_mesh_cell_is_its_solids_periodic_signed_distance_on_the_whole_cell() {
+        let soup = sphere(CENTRE, RADIUS, 24, 48);
+        let r_in = soup
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| soup.positions[i as usize]);
+                let (u, v) = (
+                    [0, 1, 2].map(|k| b[k] - a[k]),
+                    [0, 1, 2].map(|k| c[k] - a[k]),
+                );
+                let n = [
+                    u[1] * v[2] - u[2] * v[1],
+                    u[2] * v[0] - u[0] * v[2],
+                    u[0] * v[1] - u[1] * v[0],
+                ];
+                let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                if len == 0.0 {
+                    return RADIUS; // a pole's sliver: no plane
+                }
+                (0..3).map(|k| (a[k] - CENTRE[k]) * n[k]).sum::<f64>().abs() / len
+            })
+            .fold(f64::INFINITY, f64::min);
+        let sagitta = RADIUS - r_in;
+        assert!(sagitta > 0.0 && sagitta < 3e-3, "{sagitta}");
+
+        let mesh = mesh_cell_field(&encode(&soup, MeshSampling::SignedDistance)).expect("field");
+        let mut copies = Vec::new();
+        for i in -1..=1 {
+            for j in -1..=1 {
+                for k in -1..=1 {
+                    let c = [
+                        CENTRE[0] + i as f64,
+                        CENTRE[1] + j as f64,
+                        CENTRE[2] + k as f64,
+                    ];
+                    copies.push(format!(
+                        "sqrt((x - {})^2 + (y - {})^2 + (z - {})^2)",
+                        c[0], c[1], c[2]
+                    ));
+                }
+            }
+        }
+        let text = format!("min({}) - {RADIUS}", copies.join(", "));
+        let ball = expr::compile(&text).expect("expression");
+
+        let grid = Grid::spanning([-0.5; 3], [0.5; 3], [25; 3]);
+        let (got, want) = (sample(&*mesh, &grid), sample(&ball, &grid));
+        let mut worst = 0.0f64;
+        for (n, (g, w)) in got.iter().zip(&want).enumerate() {
+            let d = g - w;
+            assert!(
+                (-1e-12..=sagitta + 1e-12).contains(&d),
+                "sample {n}: mesh {g}, expression {w}"
+            );
+            worst = worst.max(d);
+        }
+        // The faceting shows: the bound is not loose by orders of magnitude.
+        assert!(worst > 0.1 * sagitta, "{worst} vs {sagitta}");
+    }
+
+    /// The samples on a cell face equal those on the opposite face, on every axis: the field
+    /// is continuous across the faces (an off-centre ball that crosses the +x face, and the
+    /// example's struts, whose end caps lie on the faces).
+    #[test]
+    fn a_mesh_cells_field_is_the_same_on_opposite_faces() {
+        let cross = read_soup(
+            "cross.obj",
+            include_bytes!("../../examples/meshes/cross.obj"),
+        )
+        .expect("cross");
+        for soup in [sphere(CENTRE, RADIUS, 24, 48), cross] {
+            let field =
+                mesh_cell_field(&encode(&soup, MeshSampling::SignedDistance)).expect("field");
+            let n = 33;
+            let grid = Grid::spanning([-0.5; 3], [0.5; 3], [n; 3]);
+            let values = sample(&*field, &grid);
+            let at = |i: usize, j: usize, k: usize| values[(k * n + j) * n + i];
+            for a in 0..n {
+                for b in 0..n {
+                    for (low, high) in [
+                        (at(0, a, b), at(n - 1, a, b)),
+                        (at(a, 0, b), at(a, n - 1, b)),
+                        (at(a, b, 0), at(a, b, n - 1)),
+                    ] {
+                        assert!(
+                            (low - high).abs() <= 1e-12,
+                            "({a}, {b}): {low} on the low face, {high} on the high face"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// The struts cross the cell faces: at a face, inside a strut, the field is the depth in
+    /// the strut (its half-width 0.12 on the axis), not zero at the end caps that meet there.
+    #[test]
+    fn a_strut_through_a_cell_face_is_solid_at_the_face() {
+        let cross = read_soup(
+            "cross.obj",
+            include_bytes!("../../examples/meshes/cross.obj"),
+        )
+        .expect("cross");
+        let field = mesh_cell_field(&encode(&cross, MeshSampling::SignedDistance)).expect("field");
+        let points = [
+            [-0.5, 0.0, 0.0],
+            [0.5, 0.03, 0.0],
+            [0.0, 0.5, -0.02],
+            [0.01, 0.0, -0.5],
+        ];
+        let mut out = [0.0; 4];
+        field.eval_points(
+            &points.map(|p| p[0]),
+            &points.map(|p| p[1]),
+            &points.map(|p| p[2]),
+            &mut out,
+        );
+        let expected = [-0.12, -0.09, -0.1, -0.11];
+        for (got, want) in out.iter().zip(expected) {
+            assert!((got - want).abs() < 1e-12, "{out:?} vs {expected:?}");
+        }
+    }
 }

@@ -1,13 +1,19 @@
 //! Chores: `cargo xtask golden [--bless]`, `cargo xtask bench [--sizes 200,400,800]
 //! [--no-peers] [--field separable|dense]`, `cargo xtask bench-mesh [triangles] [samples]`,
 //! `cargo xtask bench-tile [--resolution N] [--formats stl,ply] [--keep]`,
-//! `cargo xtask codegen [--check]`.
+//! `cargo xtask codegen [--check]`, `cargo xtask fuzz [--minutes M] [TARGET…]` (see
+//! `fuzz/mod.rs`; `--list`, `--replay`).
 //!
 //! Invariant: every generated file has a test that fails when it is stale
 //! (`tests/codegen.rs`), so generated text cannot drift from its source.
 
 mod bench_mesh;
 mod bench_tile;
+mod fuzz;
+
+/// Counts live heap bytes so that the fuzz runner can bound them (see `fuzz/bound.rs`).
+#[global_allocator]
+static ALLOCATOR: fuzz::Bounded = fuzz::Bounded;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
@@ -20,10 +26,17 @@ fn main() -> ExitCode {
         Some("bench-mesh") => bench_mesh::run(&args[1..]),
         Some("bench-tile") => bench_tile::run(&args[1..]),
         Some("codegen") => codegen(args.iter().any(|a| a == "--check")),
+        Some("fuzz") => fuzz::run(&args[1..]),
+        // Hidden: the child process of `fuzz`, one per target, fed inputs on stdin.
+        Some("fuzz-runner") => match args.get(1) {
+            Some(target) => fuzz::serve(target),
+            None => Err("fuzz-runner needs a target".to_string()),
+        },
         _ => Err(
             "usage: cargo xtask golden [--bless] | bench [--sizes 200,400,800] [--no-peers] \
                   [--field separable|dense] | bench-mesh [triangles] [samples] | bench-tile \
-                  [--resolution N] [--formats stl,ply] [--keep] | codegen [--check]"
+                  [--resolution N] [--formats stl,ply] [--keep] | codegen [--check] | fuzz \
+                  [--minutes M] [--seed N] [TARGET…] | fuzz --list | fuzz --replay"
                 .to_string(),
         ),
     };

@@ -33,17 +33,21 @@
 //! Invariants of the output:
 //! - Triangles are counter-clockwise seen from +z; vertices are shared (an interior edge is used
 //!   by exactly two triangles, in opposite directions), so the mesh is edge-manifold.
-//! - No two vertices coincide: crossings stay 1/256 of an edge away from its ends, as in 3D.
+//! - No two vertices coincide: crossings stay 1/256 of an edge away from its ends, as in 3D;
+//!   over a rectangle ([`contour_planar_box`], placed anywhere) their `f32` positions also stay
+//!   strictly inside their edge ([`crate::mesh::round_inside`], as in 3D), and a grid too fine
+//!   for `f32` at its distance from the origin is refused ([`PlanarError::BeyondF32`]).
+//!   Elements are near the origin, where 1/256 of an edge is many `f32` steps.
 //! - `positions` holds every vertex in `f64`; `mesh.vertices` are their `f32` roundings (what
-//!   the mesh writers store), so areas are exact to `f64` rounding while the mesh is the crate's
-//!   usual [`Mesh`].
+//!   the mesh writers store; a rectangle's crossings kept inside their edges), so areas are
+//!   exact to `f64` rounding while the mesh is the crate's usual [`Mesh`].
 //! - Every boundary loop point is a vertex (its `positions` entry), and the loops' edges are exactly the mesh edges used by one triangle, directed as in their triangle: the
 //!   region lies on the left, so outer loops run counter-clockwise and holes clockwise.
 //! - Deterministic: a pure function of the arguments, single-threaded.
 //! - NaN samples count as outside.
 
 use crate::element::lattice_clip;
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, inseparable_edge, round_inside};
 use rayon::prelude::*;
 
 /// A 2D reference element (METHOD §1), in Cartesian coordinates.
@@ -117,7 +121,8 @@ impl Element2 {
 pub struct PlanarRegion {
     /// Triangles in `z = 0`, counter-clockwise seen from +z, sharing vertices.
     pub mesh: Mesh,
-    /// The mesh's vertices in full precision (`mesh.vertices[i]` is `positions[i]` in `f32`).
+    /// The mesh's vertices in full precision (`mesh.vertices[i]` is `positions[i]` in `f32`,
+    /// a rectangle's crossings kept strictly inside their edges).
     pub positions: Vec<[f64; 2]>,
     /// Closed loops (last point not repeated), region on the left: outer loops
     /// counter-clockwise, holes clockwise. Every point is an entry of `positions`.
@@ -146,6 +151,21 @@ pub enum PlanarError {
     TooFewSamples(usize),
     #[error("a grid of {0} samples per axis has more vertices than 32-bit indices can address")]
     TooManySamples(usize),
+    /// Neighbouring samples with no 32-bit float between their roundings (see the 3D
+    /// [`crate::contour::ContourError::BeyondF32`]).
+    #[error(
+        "the samples are too close together for 32-bit positions (what mesh files store) this far from the origin: along {} samples {index} and {} lie at {} and {}, with no 32-bit value between them; place the domain nearer the origin or use fewer samples",
+        ["x", "y"][*axis],
+        index + 1,
+        f64::from_bits(at_bits[0]),
+        f64::from_bits(at_bits[1])
+    )]
+    BeyondF32 {
+        axis: usize,
+        index: usize,
+        /// The two coordinates, as bits (keeping the error `Eq`).
+        at_bits: [u64; 2],
+    },
 }
 
 /// Crossing points are kept this fraction of an edge away from its ends, so no two vertices
@@ -217,6 +237,16 @@ pub fn contour_planar_box(
         counts,
         clip_triangle: false,
     };
+    for (axis, &count) in counts.iter().enumerate() {
+        let coordinate = |i: usize| lattice.point_on(axis, i as f64);
+        if let Some((index, a, b)) = inseparable_edge(count, 1, coordinate) {
+            return Err(PlanarError::BeyondF32 {
+                axis,
+                index,
+                at_bits: [a.to_bits(), b.to_bits()],
+            });
+        }
+    }
     Ok(region_of(&lattice, field))
 }
 
@@ -247,6 +277,17 @@ impl Lattice {
     /// Position of the lattice point with fractional indices `(a, b)`.
     fn point(&self, a: f64, b: f64) -> [f64; 2] {
         std::array::from_fn(|d| self.origin[d] + a * self.axes[0][d] + b * self.axes[1][d])
+    }
+
+    /// Coordinate `axis` of the points with fractional index `a` along `axis`, for an
+    /// axis-aligned lattice (a rectangle): exactly [`point`](Self::point)'s.
+    fn point_on(&self, axis: usize, a: f64) -> f64 {
+        let (i, j) = if axis == 0 { (a, 0.0) } else { (0.0, a) };
+        self.point(i, j)[axis]
+    }
+
+    fn axis_aligned(&self) -> bool {
+        self.axes[0][1] == 0.0 && self.axes[1][0] == 0.0
     }
 
     /// The clipped field at every node, `i` fastest.
@@ -294,6 +335,8 @@ struct Vertices<'a> {
     x_edge: Vec<u32>,
     y_edge: Vec<u32>,
     positions: Vec<[f64; 2]>,
+    /// `positions` as the mesh stores them.
+    rounded: Vec<[f32; 3]>,
 }
 
 const NONE: u32 = u32::MAX;
@@ -301,7 +344,30 @@ const NONE: u32 = u32::MAX;
 impl Vertices<'_> {
     fn add(&mut self, p: [f64; 2]) -> u32 {
         self.positions.push(p);
+        self.rounded.push([p[0] as f32, p[1] as f32, 0.0]);
         (self.positions.len() - 1) as u32
+    }
+
+    /// Adds the crossing a fraction `t` along the edge from node `(i, j)` along `axis`; on a
+    /// rectangle its `f32` coordinate along the edge stays strictly inside the edge.
+    fn add_crossing(&mut self, i: usize, j: usize, axis: usize, t: f64) -> u32 {
+        let lattice = self.lattice;
+        let (a, b) = (i as f64, j as f64);
+        let p = if axis == 0 {
+            lattice.point(a + t, b)
+        } else {
+            lattice.point(a, b + t)
+        };
+        let id = self.add(p);
+        if lattice.axis_aligned() {
+            let start = if axis == 0 { a } else { b };
+            let ends = (
+                lattice.point_on(axis, start),
+                lattice.point_on(axis, start + 1.0),
+            );
+            self.rounded[id as usize][axis] = round_inside(p[axis], ends.0, ends.1);
+        }
+        id
     }
 
     fn node(&mut self, i: usize, j: usize) -> u32 {
@@ -317,7 +383,7 @@ impl Vertices<'_> {
         let slot = i + (nx - 1) * j;
         if self.x_edge[slot] == NONE {
             let t = crossing(self.values[i + nx * j], self.values[i + 1 + nx * j]);
-            self.x_edge[slot] = self.add(self.lattice.point(i as f64 + t, j as f64));
+            self.x_edge[slot] = self.add_crossing(i, j, 0, t);
         }
         self.x_edge[slot]
     }
@@ -327,7 +393,7 @@ impl Vertices<'_> {
         let slot = i + nx * j;
         if self.y_edge[slot] == NONE {
             let t = crossing(self.values[i + nx * j], self.values[i + nx * (j + 1)]);
-            self.y_edge[slot] = self.add(self.lattice.point(i as f64, j as f64 + t));
+            self.y_edge[slot] = self.add_crossing(i, j, 1, t);
         }
         self.y_edge[slot]
     }
@@ -351,6 +417,7 @@ fn march(lattice: &Lattice, values: &[f64]) -> (Mesh, Vec<[f64; 2]>) {
         x_edge: vec![NONE; (nx - 1) * ny],
         y_edge: vec![NONE; nx * (ny - 1)],
         positions: Vec::new(),
+        rounded: Vec::new(),
     };
     let mut triangles = Vec::new();
     let mut polygon: Vec<Item> = Vec::with_capacity(8);
@@ -394,14 +461,9 @@ fn march(lattice: &Lattice, values: &[f64]) -> (Mesh, Vec<[f64; 2]>) {
             }
         }
     }
-    let vertices = verts
-        .positions
-        .iter()
-        .map(|p| [p[0] as f32, p[1] as f32, 0.0])
-        .collect();
     (
         Mesh {
-            vertices,
+            vertices: verts.rounded,
             triangles,
         },
         verts.positions,

@@ -16,6 +16,58 @@ impl Mesh {
     }
 }
 
+/// `x`, a point inside the grid edge from coordinate `a` to `b` (along one axis), rounded to
+/// `f32` and then kept strictly between the `f32` roundings of `a` and `b`.
+///
+/// Why: the contourers keep crossings 1/256 of an edge from its ends, but far from the origin
+/// that can be less than an `f32` step (at 1000, 2⁻¹⁴ ≈ 6.1e-5: a 0.01 spacing leaves 3.9e-5),
+/// and a crossing rounded onto the `f32` of its sample point, where another crossing or a
+/// cap's node vertex may sit too: duplicate positions and triangles of zero area in what is
+/// written (and STL, read back welded by position, changes topology). Kept strictly inside its
+/// edge, a crossing's rounded position differs from every other vertex's (they lie on other
+/// edges or at nodes, and the rounded grid is still a box), so no two vertices share a
+/// position and no triangle of one cell is flat. Where rounding already lands strictly
+/// inside — everywhere but such far, fine grids — the value is the plain rounding, bit for
+/// bit. Needs [`separable`]`(a, b)`; without it the result is the rounding of an end.
+#[inline]
+pub(crate) fn round_inside(x: f64, a: f64, b: f64) -> f32 {
+    let (lo, hi) = (a as f32, b as f32);
+    let (lo, hi) = if lo <= hi { (lo, hi) } else { (hi, lo) };
+    let c = x as f32;
+    if c > lo && c < hi {
+        c
+    } else {
+        // max then min, not clamp: never panics, whatever the ends.
+        c.max(lo.next_up()).min(hi.next_down())
+    }
+}
+
+/// Whether `needed` (1 or 2) `f32` values lie strictly between the `f32` roundings of `a` and
+/// `b` (finite): the room [`round_inside`] needs for a vertex inside the edge from `a` to `b`
+/// (two for two vertices on one edge, as a shell's two levels may have).
+pub(crate) fn separable(a: f64, b: f64, needed: usize) -> bool {
+    let (lo, hi) = (a as f32, b as f32);
+    let (lo, hi) = if lo <= hi { (lo, hi) } else { (hi, lo) };
+    let inner = if needed > 1 {
+        lo.next_up().next_up()
+    } else {
+        lo.next_up()
+    };
+    lo.is_finite() && hi.is_finite() && inner < hi
+}
+
+/// The first edge `i → i + 1` of the grid coordinates `coordinate(0..count)` that
+/// [`separable`] refuses (with `needed` values inside), with the two coordinates.
+pub(crate) fn inseparable_edge(
+    count: usize,
+    needed: usize,
+    coordinate: impl Fn(usize) -> f64,
+) -> Option<(usize, f64, f64)> {
+    (0..count.saturating_sub(1))
+        .map(|i| (i, coordinate(i), coordinate(i + 1)))
+        .find(|&(_, a, b)| !separable(a, b, needed))
+}
+
 /// One piece of a mesh that is produced, checked and written in order, so a mesh of any size
 /// passes through memory a chunk at a time (tiling a large scaffold, `tile::stream`).
 ///

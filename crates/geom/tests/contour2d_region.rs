@@ -59,8 +59,16 @@ fn assert_consistent(r: &PlanarRegion, what: &str) -> Vec<f64> {
     assert_eq!(c.boundary_edges, mesh_boundary.len(), "{what}");
     // The loops' edges, mapped back to vertex ids by position, are exactly those edges.
     assert_eq!(r.positions.len(), mesh.vertices.len(), "{what}");
+    // The f32 rounding, or (a crossing kept inside its edge far from the origin) the next
+    // f32 value beside it.
     for (p, v) in r.positions.iter().zip(&mesh.vertices) {
-        assert_eq!([p[0] as f32, p[1] as f32, 0.0], *v, "{what}: f32 rounding");
+        for a in 0..2 {
+            let rounded = p[a] as f32;
+            assert!(
+                [rounded, rounded.next_up(), rounded.next_down()].contains(&v[a]),
+                "{what}: {v:?} is not {p:?} in f32"
+            );
+        }
     }
     let id: HashMap<[u64; 2], u32> = r
         .positions
@@ -326,4 +334,52 @@ fn contour2d_box_of_discs_caps_on_the_rectangle() {
         contour_planar_box(&field, min, max, [1, 5]),
         Err(PlanarError::TooFewSamples(1))
     ));
+}
+
+/// Over a rectangle far from the origin, where 1/256 of an edge is less than an `f32` step
+/// (2⁻¹⁴ at 1000, the spacing here 0.005), crossings still keep their own `f32` positions:
+/// manifold, no duplicate positions, no flat triangles. And a grid with no `f32` between
+/// two neighbouring samples is refused.
+#[test]
+fn contour2d_box_far_from_the_origin_keeps_distinct_f32_positions() {
+    let field = |p: [f64; 2]| {
+        let (dx, dy) = (p[0] - p[0].round(), p[1] - p[1].round());
+        // Circles of radius 0.3 about the integer points, and ones about the half points.
+        dx.hypot(dy).min((dx.abs() - 0.5).hypot(dy.abs() - 0.5)) - 0.3
+    };
+    for (min, max) in [
+        ([1000.0, 1000.0], [1002.0, 1001.0]),
+        ([-1002.0, 2000.0], [-1000.0, 2001.0]),
+    ] {
+        let r = contour_planar_box(&field, min, max, [401, 201]).unwrap();
+        assert_consistent(&r, "far rectangle");
+        let c = check(&r.mesh);
+        assert_eq!(
+            (c.duplicate_positions, c.degenerate_triangles),
+            (0, 0),
+            "{min:?}"
+        );
+        assert!(c.manifold, "{min:?}: {c:?}");
+        let distinct: HashSet<[u32; 3]> = r
+            .mesh
+            .vertices
+            .iter()
+            .map(|v| v.map(f32::to_bits))
+            .collect();
+        assert_eq!(distinct.len(), r.mesh.vertices.len(), "{min:?}");
+    }
+    // f32 steps are 1/16 near a million; the spacing is 0.01.
+    let err = contour_planar_box(&field, [1.0e6, 0.0], [1.0e6 + 0.1, 1.0], [11, 5]).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            PlanarError::BeyondF32 {
+                axis: 0,
+                index: 0,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    assert!(err.to_string().contains("along x samples 0 and 1"), "{err}");
 }

@@ -266,6 +266,34 @@ property float y\nproperty float z\nelement face 1\nproperty list uchar int vert
     ));
 }
 
+/// Found by `cargo xtask fuzz` (tests/fuzz_corpus/mesh-ply): an element without properties
+/// declared 4294967295 times was read instance by instance, 12 s of nothing.
+#[test]
+fn elements_without_properties_cost_nothing_however_many() {
+    let header = |extra: &str| {
+        format!(
+            "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+             property float z\n{extra}element face 1\nproperty list uchar int vertex_indices\n\
+             end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"
+        )
+    };
+    let started = std::time::Instant::now();
+    let soup = read(
+        header("element nothing 4294967295\n").as_bytes(),
+        Format::Ply,
+    )
+    .expect("the empty element is read past");
+    assert_eq!(soup.triangles, vec![[0, 1, 2]]);
+    assert!(started.elapsed() < std::time::Duration::from_secs(1));
+    // A `face` element without properties still has no `vertex_indices`.
+    let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+                property float z\nelement face 4294967295\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
+    assert!(matches!(
+        read(text.as_bytes(), Format::Ply),
+        Err(MeshReadError::Unsupported { .. })
+    ));
+}
+
 /// Every prefix of every small file, and random corruptions of them: a result, never a panic.
 /// Prefixes of the formats that declare their counts or an end marker are errors, except
 /// those that only lose part of the last line (digits of the last index, the solid's name).

@@ -214,3 +214,44 @@ fn containment_mode_agrees_with_the_sign_of_the_signed_distance() {
     }
     assert!(inside > 1000, "{inside} inside samples");
 }
+
+/// The exact sum over every triangle adds fixed blocks in order: the same bits on any pool
+/// (rayon's own `sum` splits where its scheduler does, so 1 and 3 threads disagreed).
+#[test]
+fn exact_winding_number_is_bitwise_equal_on_any_thread_count() {
+    // 20 480 triangles: more than one block, so the sum runs in parallel.
+    let soup = icosphere(5, 1.0);
+    let mesh = sdf(&soup, SdfOptions::default());
+    let mut rng = Rng::new(5);
+    let points: Vec<[f64; 3]> = (0..40).map(|_| rng.point(-1.5, 1.5)).collect();
+    let on = |threads: usize| -> Vec<u64> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        pool.install(|| {
+            points
+                .iter()
+                .map(|&p| mesh.winding_number_exact(p).to_bits())
+                .collect()
+        })
+    };
+    let one = on(1);
+    for threads in [2, 3, 5] {
+        let other = on(threads);
+        let differing = one.iter().zip(&other).filter(|(a, b)| a != b).count();
+        assert_eq!(
+            differing, 0,
+            "{differing} of 40 points differ at {threads} threads"
+        );
+    }
+    // And they are winding numbers: 1 inside the unit sphere, 0 outside (beyond its chords).
+    let margin = chord_error(&soup, 1.0);
+    for (p, &w) in points.iter().zip(&one) {
+        let (w, r) = (f64::from_bits(w), norm(*p));
+        if (r - 1.0).abs() > margin {
+            let expected = if r < 1.0 { 1.0 } else { 0.0 };
+            assert!((w - expected).abs() < 1e-9, "w({p:?}) = {w}");
+        }
+    }
+}

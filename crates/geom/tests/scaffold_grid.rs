@@ -165,6 +165,12 @@ fn grids_reject_bad_boxes_and_kinds() {
         e.to_string(),
         "grid: a grid of hex27 elements cannot be generated: expected hex8, tet4, quad4 or tri3"
     );
+    let e = grid([0.0; 3], [1.0, 1e39, 1.0], [1; 3], ElementKind::Hex8).expect_err("huge");
+    assert_eq!(
+        e.to_string(),
+        "grid: grid max: coordinate y = 1e39 is beyond ±3.4028235e38, the largest a mesh \
+         vertex (single precision) holds"
+    );
     // 2D grids ignore z entirely.
     let s = grid(
         [0.0, 0.0, 5.0],

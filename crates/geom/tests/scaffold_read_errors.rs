@@ -601,3 +601,66 @@ fn random_corruptions_never_panic() {
         }
     }
 }
+
+/// Node 5's `1 1 1` (or the OBJ/OFF vertex `1 1 0`) moved to `x y z` in each text format.
+fn with_far_node(x: &str) -> Vec<(&'static str, String)> {
+    let obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
+    let off = "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n";
+    vec![
+        ("t.msh", MSH22.replace("5 1 1 1", &format!("5 {x} 1 1"))),
+        (
+            "t41.msh",
+            MSH41.replace("\n1 1 1\n", &format!("\n{x} 1 1\n")),
+        ),
+        (
+            "t.vtk",
+            VTK.replace("0 0 1 1 1 1", &format!("0 0 1 {x} 1 1")),
+        ),
+        (
+            "t.vtu",
+            VTU.replace("0 0 1 1 1 1<", &format!("0 0 1 {x} 1 1<")),
+        ),
+        ("t.inp", INP.replace("5, 1, 1, 1", &format!("5, {x}, 1, 1"))),
+        ("t.obj", obj.replace("v 1 1 0", &format!("v {x} 1 0"))),
+        ("t.off", off.replace("\n1 1 0\n", &format!("\n{x} 1 0\n"))),
+    ]
+}
+
+#[test]
+fn coordinates_beyond_single_precision_are_refused_at_the_node_by_every_reader() {
+    // 3.4e38 is still a float (f32::MAX is 3.4028235e38); 1e39 would be infinite as one.
+    for (name, text) in with_far_node("3.4e38") {
+        let s = read(text.as_bytes(), name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(s.nodes.iter().any(|p| p[0] == 3.4e38), "{name}");
+    }
+    let expected = [
+        "t.msh:10: node 5: coordinate x",
+        "t41.msh:23: node 50: coordinate x",
+        "t.vtk:7: point 4: coordinate x",
+        "t.vtu:9: point 4: coordinate x",
+        "t.inp:9: node 5: coordinate x",
+        "t.obj:3: node 3: coordinate x",
+        "t.off:5: point 2: coordinate x",
+    ];
+    for ((name, text), expected) in with_far_node("1e39").iter().zip(expected) {
+        let m = message(text, name);
+        assert_eq!(
+            m,
+            format!(
+                "{expected} = 1e39 is beyond ±3.4028235e38, the largest a mesh vertex \
+                 (single precision) holds"
+            )
+        );
+    }
+    for (name, text) in with_far_node("-1e39") {
+        assert!(
+            message(&text, name).contains("x = -1e39 is beyond"),
+            "{name}"
+        );
+    }
+    // Not finite at all: refused too, at the same node.
+    for (name, text) in with_far_node("nan").into_iter().chain(with_far_node("inf")) {
+        let m = message(&text, name);
+        assert!(m.contains("finite"), "{name}: {m}");
+    }
+}

@@ -4,8 +4,11 @@
 use std::f64::consts::SQRT_2;
 use std::sync::Arc;
 
+use latticebuild_geom::contour::ContourError;
 use latticebuild_geom::field::ScalarField;
-use latticebuild_geom::sdf::{Aabb, ExternalField, ExternalSolids, NoExternalSolids, Program};
+use latticebuild_geom::sdf::{
+    self, Aabb, ExternalField, ExternalSolids, NoExternalSolids, Program,
+};
 
 const INF: f64 = f64::INFINITY;
 
@@ -240,4 +243,28 @@ fn bounds_contain_their_solids() {
         }
         assert!(inside > 0, "{program}: no sample inside");
     }
+}
+
+/// Found by `cargo xtask fuzz` (tests/fuzz_corpus/sdf): `offset 1e308` gives a box whose sides
+/// overflow; it was sampled at inf and NaN, and pruning changed the resulting mesh.
+#[test]
+fn a_box_whose_sides_overflow_is_an_error_not_a_mesh() {
+    let field = Program::parse_str("box shell 3 offset 1e308 ball move 1,1,0 difference")
+        .expect("parses")
+        .field(&NoExternalSolids)
+        .expect("compiles");
+    let domain = field.domain();
+    assert_eq!(domain.max[0], 1e308 + 2.5);
+    let e = sdf::mesh(&field, &domain, [6, 6, 6]).expect_err("no spacing");
+    assert!(
+        matches!(e, ContourError::BadBox(ref b) if b.starts_with("[-1e308,1e308]×")),
+        "{e}"
+    );
+    // Wide but finite sides still sample, and give a mesh of finite vertices.
+    let wide = Aabb {
+        min: [-1e307; 3],
+        max: [1e307; 3],
+    };
+    let mesh = sdf::mesh(&field, &wide, [6, 6, 6]).expect("finite spacing");
+    assert!(mesh.vertices.iter().flatten().all(|c| c.is_finite()));
 }

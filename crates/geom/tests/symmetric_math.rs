@@ -572,6 +572,46 @@ mod symmetric {
         }
     }
 
+    /// The fit sums the spectrum's bins into its coefficients in parallel: the same bits on
+    /// any pool. (Its ranges once followed the thread count, and every coefficient of an
+    /// n = 32 cell could change in its last bits between 1 and 3 threads.)
+    #[test]
+    fn symmetric_fit_is_bitwise_equal_on_any_thread_count() {
+        // Not band-limited, so every bin carries rounding-sized values to sum.
+        let input = |x: [f64; 3]| {
+            (TAU * x[0]).sin() * (TAU * x[1]).sin() * (TAU * x[2]).sin()
+                + 0.3 * ((TAU * x[0]).cos() + (TAU * x[1]).cos() + (TAU * x[2]).cos())
+                + 0.05 * (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt()
+        };
+        for g in all_groups() {
+            let bits = |threads: usize| -> Vec<([i32; 3], u64, u64)> {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .expect("pool");
+                let cell = pool
+                    .install(|| fit(&g, 32, &from_fn(input), &no_check()))
+                    .expect("fit");
+                cell.coefficients()
+                    .iter()
+                    .map(|c| (c.f, c.c.re.to_bits(), c.c.im.to_bits()))
+                    .collect()
+            };
+            let one = bits(1);
+            assert!(one.len() > 10, "{}: {} coefficients", g.name(), one.len());
+            for threads in [2, 3, 5] {
+                let other = bits(threads);
+                let differing = one.iter().zip(&other).filter(|(a, b)| a != b).count();
+                assert!(
+                    one.len() == other.len() && differing == 0,
+                    "{}: {differing} of {} coefficients differ at {threads} threads",
+                    g.name(),
+                    one.len()
+                );
+            }
+        }
+    }
+
     #[test]
     fn symmetric_fit_td_only_input_needs_the_conjugate() {
         let g = Group::td();

@@ -592,3 +592,33 @@ fn orientation_problems_are_errors_naming_elements() {
     );
     boundary_edges(&cw, "clockwise plate");
 }
+
+/// 2D tilings far from the origin: a lattice whose margin (1/256 of a lattice edge) is below
+/// the `f32` step where the scaffold lies is refused, for the region and for
+/// `thickness_normal` (whose offset surfaces reach h/2 farther); the highest resolution it
+/// names tiles into a manifold region with distinct positions.
+#[test]
+fn lattices_too_fine_for_f32_where_a_2d_scaffold_lies_are_refused() {
+    for kind in [ElementKind::Quad4, ElementKind::Tri3] {
+        // 0.25-unit elements at 1000, where an f32 step is 2⁻¹⁴: at most 0.25 / 2⁻⁶ + 1 = 17.
+        let far = grid(
+            [1000.0, 1000.0, 0.0],
+            [1001.0, 1001.0, 0.0],
+            [4, 4, 0],
+            kind,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let solid = TiledSolid::of(cell_for(kind), Solid::Inside { offset: 0.0 });
+        let err = tile_surface_scaffold(&far, &solid, 24).expect_err("refused");
+        assert!(
+            err.to_string().contains("resolution of at most 17"),
+            "{kind:?}: {err}"
+        );
+        let err = thickness_normal(&far, &solid, 24, 0.1).expect_err("refused");
+        assert!(matches!(err, RegionError::Tile(_)), "{kind:?}: {err}");
+        let region = tile(&far, cell_for(kind), 17);
+        let c = check(&region.mesh);
+        assert!(c.manifold, "{kind:?}: {c:?}");
+        assert_eq!((c.duplicate_positions, c.degenerate_triangles), (0, 0));
+    }
+}

@@ -19,6 +19,7 @@
 
 use super::table::{CORNER_SLOT, HI_SLOT, Tables};
 use crate::field::{Band, Grid, PlaneSampler};
+use crate::mesh::round_inside;
 
 /// Marks a vertex id as an ordinal among the next chunk's first vertices.
 pub const FOREIGN: u32 = 1 << 31;
@@ -179,23 +180,47 @@ impl ChunkContext<'_> {
         }
     }
 
-    /// Position of a crossing on the edge from `v0` to `v1`: of the samples' zero level, or
-    /// for a band of its lower level (`upper` false) or its upper level.
+    /// Position of a crossing on the edge from sample `at` to the next along `axis`, whose
+    /// samples are `v0` and `v1`: of the zero level, or for a band of its lower level (`upper`
+    /// false) or its upper level. Strictly inside the edge in `f32` ([`round_inside`]), which
+    /// `contour` has checked the grid leaves room for; the two levels' crossings on one edge
+    /// also differ in `f32` (see [`apart_in_f32`]).
     #[inline]
-    fn edge_crossing(&self, v0: f64, v1: f64, upper: bool) -> f64 {
-        match self.band {
-            None => Self::crossing(v0, v1),
-            Some(band) => band_crossing(v0, v1, band, upper),
-        }
+    fn edge_position(
+        &self,
+        at: [usize; 3],
+        axis: usize,
+        v0: f64,
+        v1: f64,
+        upper: bool,
+    ) -> [f32; 3] {
+        let g = self.model;
+        let mut p = self.position(at[0], at[1], at[2]);
+        let i = at[axis];
+        let (a, b) = (g.coord(axis, i), g.coord(axis, i + 1));
+        let rounded =
+            |t: f64| round_inside(g.origin[axis] + (i as f64 + t) * g.spacing[axis], a, b);
+        p[axis] = match self.band {
+            None => rounded(Self::crossing(v0, v1)),
+            Some(band) if spans_band(v0, v1, band) => {
+                let t_lo = band_crossing(v0, v1, band, false);
+                let t_hi = band_crossing(v0, v1, band, true);
+                let (lo, hi) = apart_in_f32(rounded(t_lo), rounded(t_hi), t_hi > t_lo, a, b);
+                if upper { hi } else { lo }
+            }
+            Some(band) => rounded(band_crossing(v0, v1, band, upper)),
+        };
+        p
     }
 
+    /// Position of sample `(i, j, k)`.
     #[inline]
-    fn position(&self, i: f64, j: f64, k: f64) -> [f32; 3] {
+    fn position(&self, i: usize, j: usize, k: usize) -> [f32; 3] {
         let g = self.model;
         [
-            (g.origin[0] + i * g.spacing[0]) as f32,
-            (g.origin[1] + j * g.spacing[1]) as f32,
-            (g.origin[2] + k * g.spacing[2]) as f32,
+            g.coord(0, i) as f32,
+            g.coord(1, j) as f32,
+            g.coord(2, k) as f32,
         ]
     }
 
@@ -251,7 +276,6 @@ impl ChunkContext<'_> {
         let [nx, ny, nz] = self.counts();
         let wpr = self.words_per_row();
         let last_word_mask = low_bits(nx - (wpr - 1) * 64);
-        let kf = k as f64;
         let whole_plane = k == 0 || k == nz - 1;
         for j in 0..ny {
             let boundary_row = whole_plane || j == 0 || j == ny - 1;
@@ -269,9 +293,7 @@ impl ChunkContext<'_> {
                 // In a band, `above` is zero outside it: inside nodes are those between.
                 let word = j * wpr + w;
                 let mask = inside[word] & !above[word] & columns;
-                Self::assign(node, word, mask, w, &mut ids, |i| {
-                    self.position(i as f64, j as f64, kf)
-                });
+                Self::assign(node, word, mask, w, &mut ids, |i| self.position(i, j, k));
             }
         }
     }
@@ -294,7 +316,6 @@ impl ChunkContext<'_> {
         let wpr = self.words_per_row();
         let last_word_mask = low_bits(nx - (wpr - 1) * 64);
         let inside = bits;
-        let kf = k as f64;
         for j in 0..ny {
             let row = &inside[j * wpr..(j + 1) * wpr];
             for w in 0..wpr {
@@ -302,8 +323,8 @@ impl ChunkContext<'_> {
                 let shifted = (row[w] >> 1) | (next_first << 63);
                 let mask = (row[w] ^ shifted) & edge_mask(w, wpr, nx - 1);
                 Self::assign(x_edge, j * wpr + w, mask, w, ids, |i| {
-                    let t = self.edge_crossing(values[j * nx + i], values[j * nx + i + 1], upper);
-                    self.position(i as f64 + t, j as f64, kf)
+                    let (v0, v1) = (values[j * nx + i], values[j * nx + i + 1]);
+                    self.edge_position([i, j, k], 0, v0, v1, upper)
                 });
             }
         }
@@ -320,8 +341,8 @@ impl ChunkContext<'_> {
                     (inside[j * wpr + w] ^ inside[(j + 1) * wpr + w]) & word_mask
                 };
                 Self::assign(y_edge, j * wpr + w, mask, w, ids, |i| {
-                    let t = self.edge_crossing(values[j * nx + i], values[(j + 1) * nx + i], upper);
-                    self.position(i as f64, j as f64 + t, kf)
+                    let (v0, v1) = (values[j * nx + i], values[(j + 1) * nx + i]);
+                    self.edge_position([i, j, k], 1, v0, v1, upper)
                 });
             }
         }
@@ -371,12 +392,8 @@ impl ChunkContext<'_> {
                 let word = j * wpr + w;
                 let mask = (below[word] ^ above[word]) & word_mask;
                 Self::assign(z_edge, word, mask, w, ids, |i| {
-                    let t = self.edge_crossing(
-                        lower.values[j * nx + i],
-                        upper.values[j * nx + i],
-                        upper_level,
-                    );
-                    self.position(i as f64, j as f64, k as f64 + t)
+                    let (v0, v1) = (lower.values[j * nx + i], upper.values[j * nx + i]);
+                    self.edge_position([i, j, k], 2, v0, v1, upper_level)
                 });
             }
         }
@@ -704,10 +721,8 @@ pub(super) fn corner_gradient_squared(v: &[f64; 8]) -> f64 {
 fn band_crossing(v0: f64, v1: f64, band: Band, upper: bool) -> f64 {
     let Band { lo, hi } = band;
     let level = if upper { hi } else { lo };
-    // Not above `lo`, NaN included (as the sample bits have it).
-    let below = |v: f64| v.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater);
-    let spans = (below(v0) && v1 >= hi) || (below(v1) && v0 >= hi);
-    if !spans {
+    let below = |v: f64| below_band(v, band);
+    if !spans_band(v0, v1, band) {
         return ChunkContext::crossing(v0 - level, v1 - level);
     }
     let (from, to) = if below(v0) { (v0, v1) } else { (v1, v0) };
@@ -730,6 +745,49 @@ fn band_crossing(v0: f64, v1: f64, band: Band, upper: bool) -> f64 {
         t_lo
     };
     if below(v0) { t } else { 1.0 - t }
+}
+
+/// Not above the band's lower level, NaN included (as the sample bits have it).
+#[inline]
+fn below_band(v: f64, band: Band) -> bool {
+    v.partial_cmp(&band.lo) != Some(std::cmp::Ordering::Greater)
+}
+
+/// Whether an edge with samples `v0`, `v1` runs from below the band to above it, and so
+/// holds both levels' crossings.
+#[inline]
+fn spans_band(v0: f64, v1: f64, band: Band) -> bool {
+    (below_band(v0, band) && v1 >= band.hi) || (below_band(v1, band) && v0 >= band.hi)
+}
+
+/// The `f32` positions of the lower and upper levels' crossings on one edge, whose ends round
+/// to `a` and `b`, made different: both are strictly inside the edge and `hi` lies beyond
+/// `lo` in the direction `increasing` says. Rounding keeps their order but can merge them far
+/// from the origin, where an edge spans few `f32` steps; then the upper one moves one step on,
+/// or, at the edge's end, the lower one a step back. Needs two `f32` strictly inside the edge,
+/// which `contour` checks for a band.
+#[inline]
+pub(super) fn apart_in_f32(lo: f32, hi: f32, increasing: bool, a: f64, b: f64) -> (f32, f32) {
+    if lo != hi {
+        return (lo, hi);
+    }
+    let (first, last) = (a as f32, b as f32);
+    let (first, last) = if first <= last {
+        (first, last)
+    } else {
+        (last, first)
+    };
+    if increasing {
+        if hi.next_up() < last {
+            (lo, hi.next_up())
+        } else {
+            (lo.next_down(), hi)
+        }
+    } else if hi.next_down() > first {
+        (lo, hi.next_down())
+    } else {
+        (lo.next_up(), hi)
+    }
 }
 
 /// Bits strictly below `bit` (`bit` in 0..64).

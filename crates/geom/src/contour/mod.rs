@@ -15,9 +15,18 @@
 //! - Determinism: chunk boundaries depend only on the grid, chunks are assembled in order and
 //!   samples are pure functions of their plane, so the mesh is bit-identical whatever the
 //!   number of threads.
-//! - Vertices are never closer than 1/256 of an edge to a sample point, nor (in a band) to
-//!   the other level's crossing on the same edge, so no two vertices share a position even
-//!   where the field is exactly zero at a sample.
+//! - No two vertices share an `f32` position and no triangle is flat, wherever the grid is
+//!   placed. Crossings stay 1/256 of an edge from its ends (even where the field is exactly
+//!   zero at a sample), and their `f32` positions strictly inside their edge's rounded ends
+//!   ([`crate::mesh::round_inside`]): far from the origin 1/256 of an edge can be less than an
+//!   `f32` step, and a crossing rounded onto its sample point collided with its neighbours (a
+//!   gyroid on [1000, 1002]³ at 200 samples: 366 duplicate positions, 747 flat triangles).
+//!   A shell's two levels can cross one edge; their crossings also stay 1/256 of an edge
+//!   apart, and apart in `f32` (moved a step where rounding merges them). A grid whose
+//!   rounded samples leave no `f32` strictly inside some edge (two, for a shell) cannot keep
+//!   that promise and is refused ([`ContourError::BeyondF32`]): the mesh is written as `f32` (STL
+//!   has nothing else), so no placement of its vertices would be honest. Vertices are
+//!   computed once, in `f64` from the grid, and rounded once.
 //!
 //! Shells ([`contour_band`]). A shell `|f − c| ≤ w/2` sampled as one implicit function
 //! `|f − c| − w/2` vanishes wherever its wall passes between two samples: `f − c` changes
@@ -38,7 +47,7 @@ pub mod table;
 use rayon::prelude::*;
 
 use crate::field::{Band, Grid, PlaneSampler};
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, inseparable_edge};
 use chunk::{ChunkContext, ChunkMesh, FOREIGN};
 
 /// Why a grid could not be contoured.
@@ -46,12 +55,36 @@ use chunk::{ChunkContext, ChunkMesh, FOREIGN};
 pub enum ContourError {
     #[error("the grid needs at least 2 samples per axis, got {0:?}")]
     TooFewSamples([usize; 3]),
+    /// The box, as `[x0,x1]×[y0,y1]×[z0,z1]`.
+    #[error(
+        "the box {0} cannot be sampled: its sides must be finite and positive, and so must \
+         the spacing of its samples"
+    )]
+    BadBox(String),
     #[error("the mesh would have {0} vertices, more than 32-bit indices can address")]
     TooManyVertices(u64),
     #[error("the sampler's grid has {sampler:?} samples but the model grid has {model:?}")]
     GridMismatch {
         sampler: [usize; 3],
         model: [usize; 3],
+    },
+    /// Two neighbouring samples so close for their distance from the origin that fewer than
+    /// `needed` (1, or 2 for a shell) 32-bit floats lie between their own roundings: the
+    /// edge's crossings could not be placed between them.
+    #[error(
+        "the samples are too close together for 32-bit positions (what mesh files store) this far from the origin: along {} samples {index} and {} lie at {} and {}, with {} between them; place the domain nearer the origin or use fewer samples",
+        ["x", "y", "z"][*axis],
+        index + 1,
+        f64::from_bits(at_bits[0]),
+        f64::from_bits(at_bits[1]),
+        if *needed > 1 { "fewer than two 32-bit values (a shell's two walls can cross one edge)" } else { "no 32-bit value" }
+    )]
+    BeyondF32 {
+        axis: usize,
+        index: usize,
+        needed: usize,
+        /// The two coordinates, as bits (keeping the error `Eq`).
+        at_bits: [u64; 2],
     },
 }
 
@@ -106,7 +139,7 @@ pub fn contour_band(
 ) -> Result<BandMesh, ContourError> {
     // The three states need `hi` above `lo`: at or above `hi` must imply above `lo`.
     if band.lo.partial_cmp(&band.hi) != Some(std::cmp::Ordering::Less) {
-        check_grids(sampler, model)?;
+        check_grids(sampler, Some(band), model)?;
         return Ok(BandMesh {
             mesh: Mesh::default(),
             steepest: 0.0,
@@ -171,7 +204,11 @@ pub fn steepest_at_level(sampler: &dyn PlaneSampler, level: f64) -> f64 {
         .sqrt()
 }
 
-fn check_grids(sampler: &dyn PlaneSampler, model: &Grid) -> Result<(), ContourError> {
+fn check_grids(
+    sampler: &dyn PlaneSampler,
+    band: Option<Band>,
+    model: &Grid,
+) -> Result<(), ContourError> {
     let counts = model.counts;
     if counts.iter().any(|&n| n < 2) {
         return Err(ContourError::TooFewSamples(counts));
@@ -181,6 +218,18 @@ fn check_grids(sampler: &dyn PlaneSampler, model: &Grid) -> Result<(), ContourEr
             sampler: sampler.grid().counts,
             model: counts,
         });
+    }
+    // A band's two levels may cross one edge, and need an `f32` each strictly inside it.
+    let needed = if band.is_some() { 2 } else { 1 };
+    for (axis, &count) in counts.iter().enumerate() {
+        if let Some((index, a, b)) = inseparable_edge(count, needed, |i| model.coord(axis, i)) {
+            return Err(ContourError::BeyondF32 {
+                axis,
+                index,
+                needed,
+                at_bits: [a.to_bits(), b.to_bits()],
+            });
+        }
     }
     Ok(())
 }
@@ -192,7 +241,7 @@ fn run(
     model: &Grid,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<(Mesh, f64), ContourError> {
-    check_grids(sampler, model)?;
+    check_grids(sampler, band, model)?;
     let counts = model.counts;
     let ctx = ChunkContext {
         sampler,

@@ -409,3 +409,167 @@ fn steepest_at_level_matches_the_band_contourers_estimate() {
         assert_eq!(alone.to_bits(), out.steepest.to_bits(), "{band:?}");
     }
 }
+
+/// Far from the origin 1/256 of an edge can be less than an `f32` step (2⁻¹⁴ at 1000): a
+/// crossing rounded onto its sample point met its neighbours there (the gyroid on
+/// [1000, 1002]³ at 200 samples had 366 duplicate positions and 747 flat triangles). Every
+/// placement here is closed and manifold with distinct `f32` positions — welded by position,
+/// as an STL reader does, it is the same surface — and no flat triangle.
+#[test]
+fn far_from_the_origin_vertices_keep_distinct_f32_positions() {
+    use std::f64::consts::TAU;
+    let gyroid = |p: [f64; 3]| {
+        (TAU * p[0]).sin() * (TAU * p[1]).cos()
+            + (TAU * p[1]).sin() * (TAU * p[2]).cos()
+            + (TAU * p[2]).sin() * (TAU * p[0]).cos()
+    };
+    for (min, max, samples) in [
+        ([1000.0; 3], [1002.0; 3], 200),
+        ([-1002.0, 1000.0, 0.0], [-1000.0, 1002.0, 2.0], 100),
+        ([4000.0; 3], [4001.0; 3], 100),
+        // About 4 f32 steps per edge: most crossings are moved to keep inside theirs.
+        ([30000.0; 3], [30000.5; 3], 60),
+    ] {
+        let grid = Grid::spanning(min, max, [samples; 3]);
+        let mesh = run(grid, gyroid);
+        // Unique f32 positions, one cycle around every vertex.
+        assert_closed_manifold(&mesh);
+        let check = crate::validate::check(&mesh);
+        assert_eq!(
+            (check.degenerate_triangles, check.duplicate_positions),
+            (0, 0),
+            "{min:?}..{max:?}"
+        );
+        assert!(check.watertight && check.manifold, "{min:?}..{max:?}");
+        // Welding by position changes nothing: the STL reader's view is the same surface.
+        let mut ids = HashMap::new();
+        let welded = Mesh {
+            vertices: mesh.vertices.clone(),
+            triangles: mesh
+                .triangles
+                .iter()
+                .map(|t| {
+                    t.map(|v| {
+                        let key = mesh.vertices[v as usize].map(f32::to_bits);
+                        *ids.entry(key).or_insert(v)
+                    })
+                })
+                .collect(),
+        };
+        assert!(
+            welded == mesh,
+            "{min:?}..{max:?}: welding by position merged vertices"
+        );
+    }
+}
+
+/// Where no `f32` lies between two neighbouring samples no vertex fits between them: the
+/// grid is refused, naming the axis and the samples.
+#[test]
+fn grids_finer_than_f32_at_their_place_are_refused() {
+    // f32 steps are 1/16 near a million; the spacing is 0.01.
+    let grid = Grid::spanning([0.0, 1.0e6, 0.0], [1.0, 1.0e6 + 0.1, 1.0], [5, 11, 5]);
+    let err = contour(&FnSampler { grid, f: |_| -1.0 }, &grid, &|_| {}).unwrap_err();
+    assert_eq!(
+        err,
+        ContourError::BeyondF32 {
+            axis: 1,
+            index: 0,
+            needed: 1,
+            at_bits: [1.0e6f64.to_bits(), grid.coord(1, 1).to_bits()],
+        }
+    );
+    let message = err.to_string();
+    assert!(
+        message.contains("along y samples 0 and 1 lie at 1000000 and 1000000.01"),
+        "{message}"
+    );
+}
+
+/// A shell's two levels can cross one edge; far from the origin their crossings, 1/256 of an
+/// edge apart, can round to one `f32`. Every placement keeps distinct positions, no flat
+/// triangle, and is closed and manifold, for a thick and a very thin band.
+#[test]
+fn far_from_the_origin_band_crossings_keep_distinct_f32_positions() {
+    use std::f64::consts::TAU;
+    let gyroid = |p: [f64; 3]| {
+        (TAU * p[0]).sin() * (TAU * p[1]).cos()
+            + (TAU * p[1]).sin() * (TAU * p[2]).cos()
+            + (TAU * p[2]).sin() * (TAU * p[0]).cos()
+    };
+    for (min, max, samples) in [
+        ([1000.0; 3], [1002.0; 3], 120),
+        ([4000.0; 3], [4001.0; 3], 60),
+        // About 4 f32 steps per edge: both crossings of an edge often round together.
+        ([30000.0; 3], [30000.5; 3], 60),
+    ] {
+        for band in [
+            Band { lo: -0.4, hi: 0.4 },
+            Band {
+                lo: -1e-4,
+                hi: 1e-4,
+            },
+        ] {
+            let grid = Grid::spanning(min, max, [samples; 3]);
+            let mesh = run_band(grid, band, gyroid).mesh;
+            assert!(!mesh.is_empty());
+            assert_closed_manifold(&mesh);
+            let check = crate::validate::check(&mesh);
+            assert_eq!(
+                (check.degenerate_triangles, check.duplicate_positions),
+                (0, 0),
+                "{min:?}..{max:?} {band:?}"
+            );
+        }
+    }
+}
+
+/// A shell needs two `f32` values inside each edge (one per level); a grid with only one is
+/// refused for a band though a one-level contour accepts it.
+#[test]
+fn band_grids_need_two_f32_values_inside_each_edge() {
+    // Near 2^20 = 1048576 f32 steps are 1/8: samples 0.25 apart have one f32 between them.
+    let grid = Grid::spanning([0.0, 1048576.0, 0.0], [1.0, 1048577.0, 1.0], [5, 5, 5]);
+    let f = |p: [f64; 3]| p[0] - 0.5;
+    assert!(contour(&FnSampler { grid, f }, &grid, &|_| {}).is_ok());
+    let band = Band { lo: -0.1, hi: 0.1 };
+    let err = contour_band(&FnSampler { grid, f }, band, &grid, &|_| {}).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            ContourError::BeyondF32 {
+                axis: 1,
+                needed: 2,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    assert!(
+        err.to_string().contains("fewer than two 32-bit values"),
+        "{err}"
+    );
+}
+
+#[test]
+fn apart_in_f32_separates_merged_crossings_inside_their_edge() {
+    use super::chunk::apart_in_f32;
+    let (a, b) = (1.0f64, 1.0 + 4.0 * f64::from(f32::EPSILON));
+    let mid = (1.0f32).next_up().next_up();
+    // Increasing: the upper moves on; at the last inside value the lower moves back.
+    assert_eq!(apart_in_f32(mid, mid, true, a, b), (mid, mid.next_up()));
+    let last = (b as f32).next_down();
+    assert_eq!(
+        apart_in_f32(last, last, true, a, b),
+        (last.next_down(), last)
+    );
+    // Decreasing: mirrored.
+    assert_eq!(apart_in_f32(mid, mid, false, a, b), (mid, mid.next_down()));
+    let first = (1.0f32).next_up();
+    assert_eq!(
+        apart_in_f32(first, first, false, a, b),
+        (first.next_up(), first)
+    );
+    // Already apart: unchanged.
+    assert_eq!(apart_in_f32(first, last, true, a, b), (first, last));
+}

@@ -355,6 +355,14 @@ fn read_body(header: &Header, body: &mut Body<'_>) -> Result<TriangleSoup, MeshR
     let mut corners: Vec<u32> = Vec::new();
     let mut faces = 0usize;
     for element in &header.elements {
+        if element.properties.is_empty() {
+            // Instances without properties hold no bytes, so the file cannot bound their
+            // count: there is nothing to read, however many are declared.
+            if element.name == b"face" {
+                faces = faces.saturating_add(usize::try_from(element.count).unwrap_or(usize::MAX));
+            }
+            continue;
+        }
         let name = String::from_utf8_lossy(&element.name).into_owned();
         for instance in 0..element.count {
             let what = || format!("{name} {instance} of the {} declared", element.count);

@@ -40,6 +40,12 @@
 //! step to it is shorter than the distance to the surface (or, for containment, when no
 //! triangle's box meets the step). On open surfaces every sample evaluates `w`.
 //!
+//! [`PeriodicMeshSdf`] (`periodic.rs`) is the solid repeated with period 1, as a mesh cell
+//! tiles space: the signed distance to the union of the copies, continuous across cell faces.
+//!
+//! Invariant: every value is the same bits for any rayon thread count; parallel sums (the
+//! orientation's volume, the exact winding number) add fixed blocks in order.
+//!
 //! Limit: at most 2²⁹ triangles ([`MeshSdfError::TooLarge`]), so that a BVH node's links fit
 //! one word beside its oriented box (`bvh.rs`).
 //!
@@ -50,6 +56,7 @@
 mod bvh;
 mod lanes;
 mod nearest;
+mod periodic;
 mod prepare;
 mod sampler;
 mod vec3;
@@ -61,6 +68,7 @@ use rayon::prelude::*;
 use std::time::{Duration, Instant};
 use thiserror::Error;
 
+pub use periodic::{GLUE_TOLERANCE, MAX_PERIODS, PeriodicMeshSdf};
 pub use prepare::SurfaceReport;
 pub use sampler::MeshSampler;
 
@@ -116,6 +124,20 @@ pub enum MeshSdfError {
     TooLarge { triangles: usize, max: usize },
     #[error("vertex {vertex} has a non-finite coordinate")]
     NonFinite { vertex: usize },
+    #[error(
+        "the mesh spans {extent} periods along {axis}, more than the {max} a periodic cell \
+         takes (a cell's mesh is given in the cell's frame, the cube [-1/2, 1/2]^3)"
+    )]
+    TooManyPeriods {
+        axis: &'static str,
+        extent: f64,
+        max: f64,
+    },
+    #[error(
+        "every face of the mesh is glued to a face of a neighbouring copy: repeated, the solid \
+         fills space and has no surface"
+    )]
+    FillsSpace,
     #[error("{what} must be {expected}, got {value}")]
     BadOption {
         what: &'static str,

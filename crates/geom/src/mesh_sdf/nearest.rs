@@ -353,6 +353,21 @@ pub(super) fn nearest(
 /// Whether some triangle's bounding box meets the box `[lo, hi]`: a cheap, conservative test
 /// that a segment with these bounds crosses no triangle.
 pub(super) fn any_box_overlap(bvh: &Bvh, lo: V3, hi: V3) -> bool {
+    box_overlaps(bvh, lo, hi, |_| true)
+}
+
+/// Calls `found` with the index (in `bvh.triangles`) of every triangle whose bounding box
+/// meets the box `[lo, hi]`, in a fixed order.
+pub(super) fn for_each_box_overlap(bvh: &Bvh, lo: V3, hi: V3, mut found: impl FnMut(u32)) {
+    box_overlaps(bvh, lo, hi, |t| {
+        found(t);
+        false
+    });
+}
+
+/// Visits the triangles whose boxes meet `[lo, hi]` until `stop` says so; whether it did.
+#[inline]
+fn box_overlaps(bvh: &Bvh, lo: V3, hi: V3, mut stop: impl FnMut(u32) -> bool) -> bool {
     let overlaps = |a: V3, b: V3| (0..3).all(|k| a[k] <= hi[k] && lo[k] <= b[k]);
     let nodes = &bvh.nodes;
     let mut stack = [0u32; MAX_DEPTH + 2];
@@ -366,10 +381,14 @@ pub(super) fn any_box_overlap(bvh: &Bvh, lo: V3, hi: V3) -> bool {
             continue;
         }
         if node.is_leaf() {
-            for t in &bvh.triangles[node.first() as usize..(node.first() + node.count()) as usize] {
+            let first = node.first();
+            for (k, t) in bvh.triangles[first as usize..(first + node.count()) as usize]
+                .iter()
+                .enumerate()
+            {
                 let tlo = std::array::from_fn(|k| t[0][k].min(t[1][k]).min(t[2][k]));
                 let thi = std::array::from_fn(|k| t[0][k].max(t[1][k]).max(t[2][k]));
-                if overlaps(tlo, thi) {
+                if overlaps(tlo, thi) && stop(first + k as u32) {
                     return true;
                 }
             }

@@ -23,9 +23,9 @@ use rayon::prelude::*;
 use std::ops::Range;
 
 /// Far-field threshold of the sign-only winding numbers.
-const SIGN_BETA: f64 = 1.25;
+pub(super) const SIGN_BETA: f64 = 1.25;
 /// How far from ½ a coarse winding number must be to decide the side by itself.
-const SIGN_MARGIN: f64 = 0.2;
+pub(super) const SIGN_MARGIN: f64 = 0.2;
 
 struct Previous {
     p: V3,

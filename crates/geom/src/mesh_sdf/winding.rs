@@ -248,10 +248,15 @@ pub(super) fn fast(bvh: &Bvh, moments: &[Moments], q: V3, beta2: f64) -> f64 {
 
 /// The winding number at `q` summed over every triangle exactly.
 pub(super) fn exact(triangles: &[Tri], q: V3) -> f64 {
-    let sum: f64 = if triangles.len() > 1 << 14 {
-        triangles.par_iter().map(|t| solid_angle(t, q)).sum()
+    // Fixed blocks summed in parallel, then the block sums in order: the same bits for any
+    // thread count (rayon's own `sum` splits where its scheduler does).
+    const BLOCK: usize = 1 << 14;
+    let block_sum = |block: &[Tri]| block.iter().map(|t| solid_angle(t, q)).sum::<f64>();
+    let sum: f64 = if triangles.len() > BLOCK {
+        let sums: Vec<f64> = triangles.par_chunks(BLOCK).map(block_sum).collect();
+        sums.iter().sum()
     } else {
-        triangles.iter().map(|t| solid_angle(t, q)).sum()
+        block_sum(triangles)
     };
     sum / (4.0 * PI)
 }

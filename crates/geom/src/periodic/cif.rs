@@ -1,6 +1,6 @@
 //! A CIF 1.1 reader for crystal structures: one data block, its cell, its symmetry operations
-//! (`_symmetry_equivalent_pos_as_xyz` or `_space_group_symop_operation_xyz`, in a loop or
-//! alone) and its atom sites (`_atom_site_fract_x/y/z` with labels and type symbols; numbers
+//! (`_space_group_symop_operation_xyz`, CIF 1.1's `_symmetry_equiv_pos_as_xyz`, or
+//! `_symmetry_equivalent_pos_as_xyz`, in a loop or alone) and its atom sites (`_atom_site_fract_x/y/z` with labels and type symbols; numbers
 //! may carry uncertainties like `0.1234(5)`).
 //!
 //! Invariants:
@@ -8,7 +8,8 @@
 //!   are the same items.
 //! - Whatever would change the structure but is not understood — a second data block, save
 //!   frames, Cartesian sites, a space group given only by name, an operation that does not
-//!   parse — is an error at its line and column, never skipped. Items that do not change the
+//!   parse or takes a site out of the range of `f64` — is an error at its line and column,
+//!   never skipped. Items that do not change the
 //!   structure (occupancies, displacements, bibliography) are read past.
 
 use super::{Crystal, CrystalError, Site, SymOp};
@@ -219,15 +220,52 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<Crystal, CrystalError> {
         &block,
         ["a", "b", "c"].map(|a| format!("_cell_length_{a}")),
         None,
+        (|v| v > 0.0, "positive"),
     )?;
+    let angle_tags = ["alpha", "beta", "gamma"].map(|a| format!("_cell_angle_{a}"));
     let angles = cell_values(
         &reader,
         &block,
-        ["alpha", "beta", "gamma"].map(|a| format!("_cell_angle_{a}")),
+        angle_tags.clone(),
         Some(90.0),
+        (
+            |v| v > 0.0 && v < 180.0,
+            "strictly between 0 and 180 degrees",
+        ),
     )?;
+    if super::unit_volume_squared(angles) <= super::FLAT_CELL {
+        // Shown at the first angle the file gives (a cell of defaults is never flat).
+        let first = angle_tags
+            .iter()
+            .filter_map(|t| block.item(t))
+            .min_by_key(|(tag, _)| (tag.line, tag.column));
+        let [a, b, g] = angles;
+        let message = format!(
+            "the cell angles α = {a}°, β = {b}°, γ = {g}° give a cell of no volume: \
+             1 − cos²α − cos²β − cos²γ + 2 cosα cosβ cosγ must be positive"
+        );
+        return Err(match first {
+            Some((tag, _)) => reader.at(tag, message),
+            None => reader.error(block.line, 0, message),
+        });
+    }
     let operations = operations(&reader, &block)?;
     let sites = sites(&reader, &block)?;
+    // Numbers near the range of `f64` can overflow in `W r + w`: such an image has no place
+    // in the cell (and would reach the models as NaN).
+    for (op, token) in &operations {
+        if let Some(site) = sites
+            .iter()
+            .find(|s| op.apply(s.fract).iter().any(|c| !c.is_finite()))
+        {
+            let message = format!("symmetry operation overflows on site `{}`", site.label);
+            return Err(match token {
+                Some(t) => reader.at(t, message),
+                None => reader.error(block.line, 0, message),
+            });
+        }
+    }
+    let operations = operations.into_iter().map(|(op, _)| op).collect();
     Ok(Crystal {
         name: block.name,
         lengths,
@@ -333,19 +371,24 @@ fn number(reader: &Reader<'_>, tag: &str, token: &Token) -> Result<f64, CrystalE
     }
 }
 
+/// The three values of `tags`, each passing `valid` (described by `expected`), or `default`.
 fn cell_values(
     reader: &Reader<'_>,
     block: &Block,
     tags: [String; 3],
     default: Option<f64>,
+    (valid, expected): (fn(f64) -> bool, &str),
 ) -> Result<[f64; 3], CrystalError> {
     let mut out = [0.0; 3];
     for (o, tag) in out.iter_mut().zip(&tags) {
         *o = match block.item(tag) {
             Some((_, value)) => {
                 let v = number(reader, tag, value)?;
-                if v <= 0.0 {
-                    return Err(reader.at(value, format!("`{tag}` must be positive")));
+                if !valid(v) {
+                    return Err(reader.at(
+                        value,
+                        format!("`{tag}` must be {expected}, found `{}`", value.text),
+                    ));
                 }
                 v
             }
@@ -364,12 +407,17 @@ fn cell_values(
     Ok(out)
 }
 
-const SYMOP_TAGS: [&str; 2] = [
+const SYMOP_TAGS: [&str; 3] = [
     "_space_group_symop_operation_xyz",
+    "_symmetry_equiv_pos_as_xyz",
     "_symmetry_equivalent_pos_as_xyz",
 ];
 
-fn operations(reader: &Reader<'_>, block: &Block) -> Result<Vec<SymOp>, CrystalError> {
+/// The operations, each with the token it was read from (none for the implied identity).
+fn operations(
+    reader: &Reader<'_>,
+    block: &Block,
+) -> Result<Vec<(SymOp, Option<Token>)>, CrystalError> {
     let Some((_, values)) = SYMOP_TAGS.iter().find_map(|t| block.values(t)) else {
         // Without operations the sites are the whole structure, which is right only for P1.
         let named = [
@@ -391,19 +439,20 @@ fn operations(reader: &Reader<'_>, block: &Block) -> Result<Vec<SymOp>, CrystalE
                 ));
             }
         }
-        return Ok(vec![SymOp::IDENTITY]);
+        return Ok(vec![(SymOp::IDENTITY, None)]);
     };
     values
         .into_iter()
         .map(|token| {
-            parse_operation(&token.text).map_err(|(offset, message)| {
+            let op = parse_operation(&token.text).map_err(|(offset, message)| {
                 let column = token.column + usize::from(token.quoted) + offset;
                 reader.error(
                     token.line,
                     column,
                     format!("symmetry operation `{}`: {message}", token.text),
                 )
-            })
+            })?;
+            Ok((op, Some(token.clone())))
         })
         .collect()
 }
@@ -489,6 +538,9 @@ fn parse_affine(text: &str) -> Result<([f64; 3], f64), (usize, String)> {
                     _ => return Err((d0, "expected a non-zero denominator".to_string())),
                 }
             }
+            if !v.is_finite() {
+                return Err((start, "the number is out of range".to_string()));
+            }
             value = Some(v);
             skip(&mut i);
             if i < chars.len() && chars[i] == '*' {
@@ -519,6 +571,12 @@ fn parse_affine(text: &str) -> Result<([f64; 3], f64), (usize, String)> {
     }
     if terms == 0 {
         return Err((0, "empty part".to_string()));
+    }
+    if !constant.is_finite() || coefficients.iter().any(|c| !c.is_finite()) {
+        return Err((
+            0,
+            "the numbers add up past the range of a number".to_string(),
+        ));
     }
     Ok((coefficients, constant))
 }
@@ -608,6 +666,44 @@ mod tests {
         assert_eq!(at, 4, "{message}");
     }
 
+    const P1_HEADER: &str = "data_t\n_cell_length_a 5\n_cell_length_b 5\n_cell_length_c 5\n";
+
+    /// CIF 1.1's own name for the operations loop; it used to be read past, leaving P1.
+    #[test]
+    fn the_cif_1_1_operations_tag_is_read() {
+        let text = format!(
+            "{P1_HEADER}loop_\n_symmetry_equiv_pos_as_xyz\n'x,y,z'\n'-x,-y,z+1/2'\n\
+             loop_\n_atom_site_label\n_atom_site_fract_x\n_atom_site_fract_y\n\
+             _atom_site_fract_z\nZn1 0.25 0.5 0.125\n"
+        );
+        let c = read("t.cif", text.as_bytes()).unwrap();
+        assert_eq!(c.operations.len(), 2);
+        assert_eq!(
+            c.operations[1].apply([0.25, 0.5, 0.125]),
+            [-0.25, -0.5, 0.625]
+        );
+    }
+
+    /// Found by `cargo xtask fuzz` (tests/fuzz_corpus/crystal-cif): an operation whose
+    /// number overflowed, or that overflowed on a site, put atoms at NaN.
+    #[test]
+    fn operations_that_overflow_are_errors() {
+        let huge = "1".repeat(330);
+        let (at, message) = parse_operation(&format!("y,-z+{huge}-x+1/2,-y")).unwrap_err();
+        assert_eq!(at, 5, "{message}");
+        let (at, message) =
+            parse_operation(&format!("x+{0}+{0},y,z", "9".repeat(308))).unwrap_err();
+        assert_eq!(at, 0, "{message}");
+        let text = format!(
+            "{P1_HEADER}loop_\n_space_group_symop_operation_xyz\n'x,y,z'\n'2*x,y,z'\n\
+             loop_\n_atom_site_label\n_atom_site_fract_x\n_atom_site_fract_y\n\
+             _atom_site_fract_z\nNa1 0 0 0\nCl1 1e308 0.5 0.5\n"
+        );
+        let e = read("t.cif", text.as_bytes()).unwrap_err();
+        assert_eq!((e.line, e.column), (8, 1), "{e}");
+        assert!(e.message.contains("`Cl1`"), "{e}");
+    }
+
     #[test]
     fn uncertainties_are_dropped_and_quotes_kept_whole() {
         let text = "data_t\n_cell_length_a 5.1(2)\n_cell_length_b 5\n_cell_length_c 5\n\
@@ -619,5 +715,55 @@ mod tests {
         assert_eq!(c.sites[0].fract, [0.1234, 0.5, 0.25]);
         assert_eq!(c.sites[0].species, "Si");
         assert_eq!(c.operations, vec![SymOp::IDENTITY]);
+    }
+
+    /// A P1 cell with the given angle lines, and one atom.
+    fn cell_with(angles: &str) -> String {
+        format!(
+            "data_t\n_cell_length_a 5\n_cell_length_b 5\n_cell_length_c 5\n{angles}\
+             _symmetry_space_group_name_H-M 'P 1'\nloop_\n_atom_site_label\n\
+             _atom_site_fract_x\n_atom_site_fract_y\n_atom_site_fract_z\nSi1 0 0 0\n"
+        )
+    }
+
+    #[test]
+    fn cell_angles_must_lie_strictly_between_0_and_180_degrees() {
+        let e = read("t.cif", cell_with("_cell_angle_gamma 180\n").as_bytes()).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "t.cif:5:19: `_cell_angle_gamma` must be strictly between 0 and 180 degrees, \
+             found `180`"
+        );
+        let e = read("t.cif", cell_with("_cell_angle_beta 0.0(1)\n").as_bytes()).unwrap_err();
+        assert_eq!((e.line, e.column), (5, 18), "{e}");
+        let e = read("t.cif", cell_with("_cell_angle_alpha 270\n").as_bytes()).unwrap_err();
+        assert_eq!((e.line, e.column), (5, 19), "{e}");
+        let e = read("t.cif", cell_with("_cell_angle_alpha -90\n").as_bytes()).unwrap_err();
+        assert_eq!((e.line, e.column), (5, 19), "{e}");
+        let c = read("t.cif", cell_with("_cell_angle_gamma 179.9\n").as_bytes()).unwrap();
+        assert_eq!(c.angles, [90.0, 90.0, 179.9]);
+    }
+
+    #[test]
+    fn angles_no_three_edges_can_have_are_an_error_at_the_first_angle() {
+        // α + β = γ: the third edge lies in the plane of the other two (volume exactly 0).
+        let flat = "_cell_angle_alpha 60\n_cell_angle_beta 60\n_cell_angle_gamma 120\n";
+        let e = read("t.cif", cell_with(flat).as_bytes()).unwrap_err();
+        assert_eq!((e.line, e.column), (5, 1), "{e}");
+        assert!(e.message.contains("no volume"), "{e}");
+        // α + β < γ: no vectors have these angles (the volume would be imaginary).
+        let impossible = "_cell_angle_gamma 150\n_cell_angle_alpha 30\n_cell_angle_beta 30\n";
+        let e = read("t.cif", cell_with(impossible).as_bytes()).unwrap_err();
+        assert_eq!((e.line, e.column), (5, 1), "{e}");
+        assert!(
+            {
+                let c = [30f64, 30.0, 150.0].map(|d| d.to_radians().cos());
+                1.0 - c[0] * c[0] - c[1] * c[1] - c[2] * c[2] + 2.0 * c[0] * c[1] * c[2]
+            } < -0.5,
+            "an independent check that the cell is impossible"
+        );
+        // Just off flat, a real (if thin) cell: accepted.
+        let thin = "_cell_angle_alpha 60\n_cell_angle_beta 60\n_cell_angle_gamma 119.9\n";
+        assert!(read("t.cif", cell_with(thin).as_bytes()).is_ok());
     }
 }

@@ -5,6 +5,9 @@
 //! Invariants:
 //! - Readers take bytes and a display name, never a path; every error names the file and the
 //!   line and column of the problem ([`CrystalError`]), and nothing a file contains panics.
+//! - A crystal's cell has a volume: every angle is strictly between 0° and 180° and together
+//!   they span space ([`unit_volume_squared`] above [`FLAT_CELL`]); a file whose cell does
+//!   not is an error at the cell's line.
 //! - Atom positions are fractional coordinates of the conventional cell; the models built
 //!   from them are in the same coordinates, so a model with integer basis vectors has period 1
 //!   on every axis, like every other cell.
@@ -167,6 +170,20 @@ pub fn positions_of(atoms: &[Atom], species: Option<&str>) -> Vec<[f64; 3]> {
         .map(|a| a.fract)
         .collect()
 }
+
+/// The squared volume of a cell with unit edges and angles `α, β, γ` (degrees):
+/// `1 − cos²α − cos²β − cos²γ + 2 cosα cosβ cosγ`, the Gram determinant of its edge vectors.
+/// Zero for a flat cell (the third edge in the plane of the other two), negative for angles
+/// no three vectors can have (`α = β = 30°, γ = 90°`).
+pub fn unit_volume_squared(angles: [f64; 3]) -> f64 {
+    let [a, b, c] = angles.map(|d| d.to_radians().cos());
+    1.0 - a * a - b * b - c * c + 2.0 * a * b * c
+}
+
+/// A cell whose [`unit_volume_squared`] is at most this is flat: its unit-edge volume is
+/// below 10⁻⁶. Whole-degree angles round their cosines by about 10⁻¹⁶, so a truly flat cell
+/// (60°, 60°, 120°) comes out within ~10⁻¹⁶ of 0, and every real crystal is above 10⁻².
+pub const FLAT_CELL: f64 = 1e-12;
 
 /// A problem in a crystal file, at a line and column (1-based; column 0 for a whole line).
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]

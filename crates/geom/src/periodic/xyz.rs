@@ -3,8 +3,9 @@
 //! then one atom per line with Cartesian positions.
 //!
 //! Invariants: positions are converted to fractional coordinates of the lattice (the columns
-//! of `[a b c]`); the structure has no symmetry operations beyond the identity; a missing or
-//! singular lattice, a short file or a bad number is an error at its line and column.
+//! of `[a b c]`), always finite; the structure has no symmetry operations beyond the
+//! identity; a missing, singular or overflowing lattice, a short file or a bad number is an
+//! error at its line and column.
 
 use super::{Crystal, CrystalError, Site, SymOp};
 
@@ -104,14 +105,40 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<Crystal, CrystalError> {
         std::array::from_fn(|v| std::array::from_fn(|c| numbers[3 * v + c]));
     // Columns of M are a, b, c: r = M f.
     let m: [[f64; 3]; 3] = std::array::from_fn(|r| std::array::from_fn(|c| vectors[c][r]));
-    let to_fractional = invert(m).ok_or_else(|| {
+    let lengths = vectors.map(|v| v.iter().map(|c| c * c).sum::<f64>().sqrt());
+    let flat = || {
         error(
             file,
             2,
             lattice.2,
-            "the lattice vectors are linearly dependent",
+            "the lattice vectors span no volume (one is zero or they lie in a plane)",
         )
-    })?;
+    };
+    // Finite numbers can still overflow in the lengths (`1e308`), which would make the
+    // flatness test below meaningless and put atoms at NaN.
+    let out_of_range = || {
+        error(
+            file,
+            2,
+            lattice.2,
+            "`Lattice` is out of range: its lengths or inverse overflow",
+        )
+    };
+    if lengths.iter().any(|v| !v.is_finite()) {
+        return Err(out_of_range());
+    }
+    // Judged by the volume relative to the edges' lengths, as a CIF's angles are, so that
+    // neither the unit nor the cell's size decides whether it is flat.
+    let unit_volume = det3(m) / (lengths[0] * lengths[1] * lengths[2]);
+    // NaN (a zero edge) is flat too.
+    let spans = (unit_volume * unit_volume).partial_cmp(&super::FLAT_CELL);
+    if spans != Some(std::cmp::Ordering::Greater) {
+        return Err(flat());
+    }
+    let to_fractional = invert(m).ok_or_else(flat)?;
+    if to_fractional.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(out_of_range());
+    }
 
     let (species_column, position_column) = match pairs
         .iter()
@@ -121,7 +148,6 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<Crystal, CrystalError> {
         Some((_, spec, column)) => properties(file, spec, *column)?,
     };
 
-    let lengths = vectors.map(|v| v.iter().map(|c| c * c).sum::<f64>().sqrt());
     let angle = |i: usize, j: usize| {
         let dot: f64 = (0..3).map(|c| vectors[i][c] * vectors[j][c]).sum();
         (dot / (lengths[i] * lengths[j]))
@@ -129,7 +155,8 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<Crystal, CrystalError> {
             .acos()
             .to_degrees()
     };
-    let mut sites = Vec::with_capacity(count);
+    // The count is the file's word: reserve no more than there are lines for.
+    let mut sites = Vec::with_capacity(count.min(lines.len().saturating_sub(2)));
     for n in 0..count {
         let number = n + 3;
         let line = lines.get(n + 2).ok_or_else(|| {
@@ -168,7 +195,16 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<Crystal, CrystalError> {
                     )
                 })?;
         }
-        let fract = std::array::from_fn(|i| (0..3).map(|j| to_fractional[i][j] * r[j]).sum());
+        let fract: [f64; 3] =
+            std::array::from_fn(|i| (0..3).map(|j| to_fractional[i][j] * r[j]).sum());
+        if fract.iter().any(|f| !f.is_finite()) {
+            return Err(error(
+                file,
+                number,
+                0,
+                format!("atom {}: its fractional coordinates overflow", n + 1),
+            ));
+        }
         let element: String = species
             .chars()
             .take_while(|c| c.is_ascii_alphabetic())
@@ -188,11 +224,16 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<Crystal, CrystalError> {
     })
 }
 
-fn invert(m: [[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
-    let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+fn det3(m: [[f64; 3]; 3]) -> f64 {
+    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
         - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    if det.abs() < 1e-12 || !det.is_finite() {
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+}
+
+/// The inverse of `m`, whose columns the caller has checked span a volume.
+fn invert(m: [[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
+    let det = det3(m);
+    if det == 0.0 || !det.is_finite() {
         return None;
     }
     let c =
@@ -236,7 +277,7 @@ fn properties(file: &str, spec: &str, column: usize) -> Result<(usize, usize), C
             "`Properties` must be name:type:count triples",
         ));
     }
-    let (mut species, mut position, mut at) = (None, None, 0);
+    let (mut species, mut position, mut at) = (None, None, 0usize);
     for triple in fields.chunks(3) {
         let count: usize = triple[2].parse().map_err(|_| {
             error(
@@ -251,7 +292,14 @@ fn properties(file: &str, spec: &str, column: usize) -> Result<(usize, usize), C
             ("pos", "R", 3) => position = Some(at),
             _ => {}
         }
-        at += count;
+        at = at.checked_add(count).ok_or_else(|| {
+            error(
+                file,
+                2,
+                column,
+                "the counts of `Properties` add up to more columns than a line can have",
+            )
+        })?;
     }
     match (species, position) {
         (Some(s), Some(p)) => Ok((s, p)),
@@ -280,6 +328,39 @@ mod tests {
         assert_eq!(c.angles, [90.0, 90.0, 90.0]);
     }
 
+    /// Found by `cargo xtask fuzz` (tests/fuzz_corpus/crystal-xyz): each of these panicked
+    /// (an overflowing column sum, a capacity overflow) or gave atoms at NaN.
+    #[test]
+    fn hostile_counts_and_overflowing_numbers_are_errors() {
+        let e = read(
+            "t.xyz",
+            b"2\nLattice=\"4 0 0 0 5 0 0 0 2\"Properties=::18446744073709551615:::3\n",
+        )
+        .unwrap_err();
+        assert_eq!((e.line, e.column), (2, 39), "{e}");
+        assert!(e.message.contains("add up to more columns"), "{e}");
+        // A count far past the lines: an error about the short file, not an allocation.
+        let e = read(
+            "t.xyz",
+            b"18446744073709551615\nLattice=\"4 0 0 0 5 0 0 0 2\"\nSi 0 0 0\n",
+        )
+        .unwrap_err();
+        assert_eq!(e.line, 4, "{e}");
+        assert!(e.message.contains("the file ends after 1"), "{e}");
+        // Finite numbers whose lengths and inverse overflow.
+        let e = read("t.xyz", b"1\nLattice=\"4 0 0 1 5 0 1e308 5 2\"\nSi 0 2 0\n").unwrap_err();
+        assert_eq!((e.line, e.column), (2, 9), "{e}");
+        assert!(e.message.contains("out of range"), "{e}");
+        // A fine lattice, but a position whose fractional coordinate overflows.
+        let e = read(
+            "t.xyz",
+            b"2\nLattice=\"1e-4 0 0 0 1e-4 0 0 0 1e4\"\nSi 0 0 0\nO 1e305 0 0\n",
+        )
+        .unwrap_err();
+        assert_eq!(e.line, 4, "{e}");
+        assert!(e.message.contains("atom 2"), "{e}");
+    }
+
     #[test]
     fn errors_name_line_and_column() {
         let text = "2\nLattice=\"4 0 0 0 5 0 0 0 2\"\nSi 1.0 2.5 0.5\nO 2 zero 1\n";
@@ -287,5 +368,20 @@ mod tests {
         assert_eq!((e.line, e.column), (4, 5), "{e}");
         let e = read("t.xyz", b"1\nno lattice\nSi 0 0 0\n").unwrap_err();
         assert_eq!(e.line, 2, "{e}");
+    }
+
+    #[test]
+    fn a_flat_lattice_is_an_error_whatever_its_size() {
+        let with = |lattice: &str| format!("1\nLattice=\"{lattice}\"\nSi 0 0 0\n");
+        // Kilometre-long edges, c in the plane of a and b but for 1e-9: a determinant of
+        // 1e-3 (an absolute test passes it) in a cell whose volume is ~7e-13 of a·b·c.
+        let e = read("t.xyz", with("1000 0 0 0 1000 0 1000 1000 1e-9").as_bytes()).unwrap_err();
+        assert_eq!((e.line, e.column), (2, 9), "{e}");
+        assert!(e.message.contains("span no volume"), "{e}");
+        let e = read("t.xyz", with("4 0 0 0 5 0 0 0 0").as_bytes()).unwrap_err();
+        assert_eq!((e.line, e.column), (2, 9), "{e}");
+        // A tiny but square cell is a cell: 1e-5 edges, determinant 1e-15.
+        let c = read("t.xyz", with("1e-5 0 0 0 1e-5 0 0 0 1e-5").as_bytes()).unwrap();
+        assert_eq!(c.angles, [90.0, 90.0, 90.0]);
     }
 }

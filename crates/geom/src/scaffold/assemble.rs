@@ -2,12 +2,35 @@
 //! highest dimension, insist on one kind, resolve node tags, attach node data.
 //!
 //! Invariants: the result satisfies every invariant of `Scaffold` (mod.rs); each error names
-//! where the offending node or element was written (through the reader's `Locator`).
+//! where the offending node or element was written (through the reader's `Locator`). Every
+//! reader ends here, so the checks on all nodes (coordinates within single precision) and
+//! elements are made once for every format.
 
 use std::collections::HashMap;
 
 use super::cursor::Locator;
 use super::{ElementKind, NodeData, Scaffold, ScaffoldError};
+
+/// Why a node position cannot be tiled, if it cannot: a coordinate that is not finite, or
+/// beyond single precision, the precision of tiled meshes (their cache entries and files),
+/// where it would turn infinite. Shared by every reader (through [`RawMesh::finish`]) and by
+/// the grid generator.
+pub(super) fn coordinate_problem(p: [f64; 3]) -> Option<String> {
+    let axis = p
+        .iter()
+        .position(|v| !v.is_finite() || v.abs() > f64::from(f32::MAX))?;
+    let name = ["x", "y", "z"][axis];
+    let v = p[axis];
+    Some(if v.is_finite() {
+        format!(
+            "coordinate {name} = {v:e} is beyond ±{:e}, the largest a mesh vertex (single \
+             precision) holds",
+            f32::MAX
+        )
+    } else {
+        format!("coordinate {name} is {v}, not a finite number")
+    })
+}
 
 /// An element type as a file names it, with what is needed to drop or reject it.
 #[derive(Clone, Debug, PartialEq)]
@@ -138,6 +161,14 @@ impl RawMesh {
             )));
         };
 
+        for (i, p) in self.nodes.iter().enumerate() {
+            if let Some(problem) = coordinate_problem(*p) {
+                return Err(loc.error(
+                    self.node_at[i],
+                    format!("{node_word} {}: {problem}", self.node_tags[i]),
+                ));
+            }
+        }
         let index = NodeIndex::new(&self, node_word, loc)?;
         let n = kind.node_count();
         let kept = counts[0].1;

@@ -49,6 +49,13 @@ pub fn grid(
                 max[a]
             )));
         }
+        for (end, v) in [("min", min[a]), ("max", max[a])] {
+            let mut p = [0.0; 3];
+            p[a] = v;
+            if let Some(problem) = super::assemble::coordinate_problem(p) {
+                return Err(fail(format!("grid {end}: {problem}")));
+            }
+        }
         if divisions[a] == 0 {
             return Err(fail(format!(
                 "grid axis {}: expected at least 1 division, found 0",

@@ -7,7 +7,8 @@
 //!
 //! Invariants of a returned scaffold:
 //! - `connectivity` holds `kind.node_count()` indices per element, each < `nodes.len()`; every
-//!   coordinate is finite; there is at least one element. `node_tags`, `element_tags`,
+//!   coordinate is finite and within single precision (`|c| ≤ f32::MAX`, as tiled meshes
+//!   store vertices); there is at least one element. `node_tags`, `element_tags`,
 //!   `physical` and every `node_data[..].values` are parallel to `nodes` or to the elements.
 //! - Only elements of the highest dimension in the file are kept (boundary triangles, lines and
 //!   points of a volume mesh are dropped), and they are all of one kind: anything else is an

@@ -72,7 +72,7 @@ pub use error::SdfError;
 pub use external::{ExternalField, ExternalSolids, NoExternalSolids};
 pub use field::SdfField;
 pub use include::{IncludeResolver, Included, MAX_DEPTH, MAX_WORDS, expand};
-pub use options::{OptionError, parse_box, parse_samples, spread_samples};
+pub use options::{MAX_SAMPLES_PER_AXIS, OptionError, parse_box, parse_samples, spread_samples};
 pub use parse::{BINARY_WORDS, SOLID_WORDS, UNARY_WORDS};
 pub use sampler::{TILE_X, TILE_Y};
 pub use tree::{Node, Op, Tree};
@@ -155,7 +155,28 @@ pub fn mesh_with_progress(
     if counts.iter().any(|&n| n < 2) {
         return Err(ContourError::TooFewSamples(counts));
     }
+    // A side that overflows (bounds near ±1e308, from `offset 1e308`) leaves no spacing: the
+    // samples would stand at inf and NaN and the mesh be noise.
+    let spacing_ok = |a: usize| {
+        let side = domain.max[a] - domain.min[a];
+        side.is_finite() && side > 0.0 && side / (counts[a] - 1) as f64 > 0.0
+    };
+    if !(0..3).all(spacing_ok) {
+        let sides: Vec<String> = (0..3)
+            .map(|a| format!("[{},{}]", short(domain.min[a]), short(domain.max[a])))
+            .collect();
+        return Err(ContourError::BadBox(sides.join("×")));
+    }
     let grid = Grid::spanning(domain.min, domain.max, counts);
     let sampler = field.sampler(&grid);
     contour(sampler.as_ref(), &grid, progress)
+}
+
+/// A coordinate as a reader wants it in a message: `1e308`, not 309 digits.
+fn short(x: f64) -> String {
+    if x != 0.0 && !(1e-4..1e9).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
 }

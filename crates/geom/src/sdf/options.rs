@@ -11,7 +11,9 @@
 //! Box: six comma-separated numbers, the lower corner then the upper one.
 //!
 //! Invariants: components are numbers in the language of numeric arguments (`args.rs`);
-//! sample counts are whole numbers of at least 2 per axis; a box has `min < max` on every axis.
+//! sample counts are whole numbers from 2 to [`MAX_SAMPLES_PER_AXIS`] per axis (the limit a
+//! manifest's `samples` has too; a total is checked by the counts it spreads to, so `100001^3`
+//! is refused for its 100001 per axis, not for its size); a box has `min < max` on every axis.
 
 use super::args;
 use super::bounds::Aabb;
@@ -29,29 +31,64 @@ pub enum OptionError {
     NotWhole { text: String },
     #[error("`{text}` gives fewer than 2 samples along an axis; a grid needs at least 2")]
     TooFewSamples { text: String },
+    #[error(
+        "`{text}` gives {count} samples along {}; an axis has at most {MAX_SAMPLES_PER_AXIS}",
+        ["x", "y", "z"][*axis]
+    )]
+    TooManySamples {
+        text: String,
+        axis: usize,
+        /// The count asked for, as shown: whole, or in exponent form when huge.
+        count: String,
+    },
     #[error("`{text}` has {count} components; a box needs six: x0,y0,z0,x1,y1,z1")]
     BoxComponents { text: String, count: usize },
     #[error("`{text}`: the lower corner must be below the upper one on every axis")]
     InvertedBox { text: String },
 }
 
-/// Largest sample count accepted along one axis or in total, far beyond any memory.
-const MAX_SAMPLES: f64 = 1e15;
+/// Most samples along one axis, as documented for `-s` and a manifest's `samples`: 100000³
+/// is already far beyond any memory, and the limit keeps every count and product well
+/// inside `usize`.
+pub const MAX_SAMPLES_PER_AXIS: usize = 100_000;
+
+/// A count as a message shows it: whole, or in exponent form past what `f64` holds exactly.
+fn count_text(count: f64) -> String {
+    if count < 1e15 {
+        format!("{count}")
+    } else {
+        format!("{count:e}")
+    }
+}
 
 /// Samples per axis from `-s` text: one total, or three counts.
 pub fn parse_samples(text: &str) -> Result<[usize; 3], OptionError> {
     let values = args::constants(text).map_err(OptionError::NotANumber)?;
-    let whole = |v: f64| -> Result<u64, OptionError> {
-        if v != v.trunc() || !(0.0..=MAX_SAMPLES).contains(&v) {
+    let whole = |v: f64| -> Result<f64, OptionError> {
+        if v != v.trunc() || v < 0.0 {
             return Err(OptionError::NotWhole {
                 text: text.to_string(),
             });
         }
-        Ok(v as u64)
+        Ok(v)
     };
-    let counts = match values.as_slice() {
-        [total] => spread_samples(whole(*total)?),
-        [a, b, c] => [whole(*a)?, whole(*b)?, whole(*c)?].map(|v| v as usize),
+    let too_many = |axis: usize, count: f64| OptionError::TooManySamples {
+        text: text.to_string(),
+        axis,
+        count: count_text(count),
+    };
+    let counts: [f64; 3] = match values.as_slice() {
+        [total] => {
+            let total = whole(*total)?;
+            // A total whose cube root alone is past the limit is refused before it could
+            // saturate the integer arithmetic of the spread.
+            let root = total.cbrt().floor();
+            if root > MAX_SAMPLES_PER_AXIS as f64 {
+                return Err(too_many(0, root));
+            }
+            spread_samples(total as u64).map(|n| n as f64)
+        }
+        [a, b, c] => [whole(*a)?, whole(*b)?, whole(*c)?],
         _ => {
             return Err(OptionError::SampleComponents {
                 text: text.to_string(),
@@ -59,6 +96,11 @@ pub fn parse_samples(text: &str) -> Result<[usize; 3], OptionError> {
             });
         }
     };
+    if let Some(axis) = (0..3).find(|&a| counts[a] > MAX_SAMPLES_PER_AXIS as f64) {
+        return Err(too_many(axis, counts[axis]));
+    }
+    // Each count is now a whole number within the limit, so exact as `usize`.
+    let counts = counts.map(|n| n as usize);
     if counts.iter().any(|&n| n < 2) {
         return Err(OptionError::TooFewSamples {
             text: text.to_string(),
@@ -145,6 +187,35 @@ mod tests {
             parse_samples("many"),
             Err(OptionError::NotANumber(_))
         ));
+    }
+
+    #[test]
+    fn an_axis_has_at_most_100000_samples_and_the_message_says_so() {
+        assert_eq!(parse_samples("100000^3"), Ok([100_000; 3]));
+        assert_eq!(parse_samples("100000,2,2"), Ok([100_000, 2, 2]));
+        assert_eq!(
+            parse_samples("100001^3").unwrap_err().to_string(),
+            "`100001^3` gives 100001 samples along x; an axis has at most 100000"
+        );
+        // A total just short of 100001 × 100000² still spreads to 100000 per axis.
+        assert_eq!(parse_samples("100001*100000^2-1"), Ok([100_000; 3]));
+        assert_eq!(
+            parse_samples("100001*100000^2").unwrap_err().to_string(),
+            "`100001*100000^2` gives 100001 samples along x; an axis has at most 100000"
+        );
+        assert_eq!(
+            parse_samples("200000,3,3").unwrap_err().to_string(),
+            "`200000,3,3` gives 200000 samples along x; an axis has at most 100000"
+        );
+        assert_eq!(
+            parse_samples("3,3,4294967297").unwrap_err().to_string(),
+            "`3,3,4294967297` gives 4294967297 samples along z; an axis has at most 100000"
+        );
+        // Far past u64: refused by its cube root, shown in exponent form.
+        assert_eq!(
+            parse_samples("1e300").unwrap_err().to_string(),
+            "`1e300` gives 1e100 samples along x; an axis has at most 100000"
+        );
     }
 
     #[test]

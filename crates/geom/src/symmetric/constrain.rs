@@ -299,7 +299,9 @@ fn face_residual(face: &Face, frame: Frame, waves: &[([i32; 3], Complex64)]) -> 
         let e = cis_fraction(i64::from(t) * face.c_num, face.den);
         *lines.entry(k0).or_default() += w * e * f64::from(nk);
     }
-    let lines: Vec<([i32; 3], Complex64)> = lines.into_iter().collect();
+    // In a fixed order: the sum below must not follow the map's per-process random order.
+    let mut lines: Vec<([i32; 3], Complex64)> = lines.into_iter().collect();
+    lines.sort_unstable_by_key(|&(k, _)| k);
     let kmax = lines
         .iter()
         .flat_map(|(k, _)| k.iter().map(|v| v.unsigned_abs() as usize))

@@ -28,6 +28,11 @@ use super::fit::FitError;
 
 const ZERO: Complex64 = Complex64::new(0.0, 0.0);
 
+/// How many ranges of `ky` [`Spectrum::par_fold_entries`] folds separately: a constant, so
+/// that the order of its floating-point sums is one for every thread count; 16 keeps a
+/// 16-thread pool busy while each task's accumulator stays small next to the spectrum.
+const FOLD_TASKS: usize = 16;
+
 /// `v mod n` in `[0, n)`, without a division in the usual case `|v| < n`.
 #[inline]
 pub(crate) fn wrap(v: i32, n: usize) -> usize {
@@ -268,7 +273,9 @@ impl Spectrum {
 
     /// Runs `fill(lo, hi, block)` in parallel over disjoint ranges `lo..hi` of `ky`, each
     /// with the storage of those rows (`kx + H·kz` within a row of `ky`, rows of
-    /// [`row_len`](Self::row_len)). Lets a filler write without locks.
+    /// [`row_len`](Self::row_len)). Lets a filler write without locks. The ranges follow the
+    /// thread count, so `fill` must compute each entry the same way whatever range holds it
+    /// (the coarse-grid scatter of `eval.rs` replays every term, in order, in every range).
     pub(crate) fn par_ky_ranges(&mut self, fill: impl Fn(usize, usize, &mut [Complex64]) + Sync) {
         let n = self.n;
         let row = self.row_len();
@@ -285,7 +292,12 @@ impl Spectrum {
 
     /// Calls `visit(k, value)` for every stored entry, `k` taken in `(−N/2, N/2]` per axis,
     /// in parallel over ranges of `ky`; each task folds into its own accumulator made by
-    /// `init`, and the accumulators are returned.
+    /// `init`, and the accumulators are returned in `ky` order.
+    ///
+    /// The ranges depend only on `N` ([`FOLD_TASKS`] of them at most), never on the thread
+    /// count: a caller that adds the accumulators in order gets the same bits on any pool.
+    /// (With one range per thread, a fitted cell's coefficients differed in their last bits
+    /// between `-j 1` and `-j 3`, and so did every mesh made from it.)
     pub(crate) fn par_fold_entries<A: Send>(
         &self,
         init: impl Fn() -> A + Sync,
@@ -302,8 +314,7 @@ impl Spectrum {
                 i as i32
             }
         };
-        let tasks = (2 * rayon::current_num_threads()).clamp(1, n);
-        let per = n.div_ceil(tasks);
+        let per = n.div_ceil(FOLD_TASKS.clamp(1, n.max(1)));
         self.data
             .par_chunks(row * per)
             .enumerate()

@@ -22,6 +22,10 @@
 //! - `fft` (private) — realfft along x (contiguous), rustfft along y and z, rayon across
 //!   planes and rows.
 //!
+//! Invariant: every result (coefficients, grids, reports) is the same bits for any rayon
+//! thread count. Parallel work writes disjoint outputs, or sums fixed ranges and adds them in
+//! order (`fft`'s fold over the spectrum); nothing sums in a hash map's iteration order.
+//!
 //! Errors: one [`FitError`] for sampling, fitting, evaluating and blending, and [`GroupError`]
 //! for groups; nothing here panics on user input.
 //!

@@ -33,7 +33,9 @@
 //! Invariants: the output is closed, manifold and outward-oriented whenever every element
 //! map is orientation-preserving and the scaffold is conforming (each face used by one or two
 //! elements); vertex and triangle order depend only on the scaffold, the cell and the
-//! resolution.
+//! resolution. A resolution whose vertex margin (1/256 of a lattice edge) is below the `f32`
+//! step where the scaffold lies is refused before tiling (`scaffold::check_f32_room`): the
+//! written `f32` positions could not keep vertices apart.
 
 mod cube;
 mod face_plan;
@@ -131,6 +133,26 @@ pub enum TileError {
     NotVolume(&'static str),
     #[error("the mesh would have {0} vertices, more than 32-bit indices can address")]
     TooManyVertices(u64),
+    /// The tiler's margin between vertices and lattice points is below one `f32` step where
+    /// the scaffold lies (see [`scaffold::check_f32_room`]).
+    #[error(
+        "at resolution {resolution} the lattice is too fine for 32-bit positions (what mesh files store) this far from the origin: vertices are kept {} from lattice points (1/256 of the shortest lattice edge, {}), less than the 32-bit step {} at {}, as far as the scaffold reaches; place the scaffold nearer the origin or use a resolution of at most {max_resolution}",
+        f64::from_bits(*margin_bits),
+        f64::from_bits(*edge_bits),
+        f64::from_bits(*step_bits),
+        f64::from_bits(*reach_bits)
+    )]
+    BeyondF32 {
+        resolution: usize,
+        /// The shortest lattice edge, the margin (1/256 of it), the `f32` step at `reach` and
+        /// the largest coordinate magnitude, as bits (keeping the error `Eq`).
+        edge_bits: u64,
+        margin_bits: u64,
+        step_bits: u64,
+        reach_bits: u64,
+        /// The highest resolution whose margin is at least the step (below 2: none).
+        max_resolution: usize,
+    },
     #[error("skin: {0}")]
     Skin(String),
     /// What the receiver of a streamed tiling's chunks reported.

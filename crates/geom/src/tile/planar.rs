@@ -37,6 +37,7 @@
 //! - Everything is a pure function of the arguments: identical for any thread count.
 
 use super::lattice::Lattice;
+use super::scaffold::check_f32_room;
 use super::square::SquareLattice;
 use super::triangle::TriangleLattice;
 use super::weld::Corners;
@@ -254,6 +255,7 @@ pub fn tile_surface_scaffold(
     resolution: usize,
 ) -> Result<TiledRegion, RegionError> {
     let (shape, corners) = surface_corners(scaffold)?;
+    check_f32_room(scaffold, resolution, 0.0)?;
     let plane = plane_z(scaffold);
     let flip = match plane {
         Some(_) => planar_flip(scaffold)?,
@@ -435,6 +437,8 @@ pub fn thickness_normal(
 ) -> Result<TiledShell, RegionError> {
     check_length("thickness_normal", h)?;
     let (shape, corners) = surface_corners(scaffold)?;
+    // The offset surfaces reach h/2 farther than the scaffold.
+    check_f32_room(scaffold, resolution, 0.5 * h)?;
     check_consistent(scaffold)?;
     let normals = nodal_normals(scaffold)?;
     let tile_at = |shift: f64| {

@@ -30,6 +30,7 @@ pub fn tile_scaffold(
     solid: &TiledSolid,
     resolution: usize,
 ) -> Result<(Mesh, TileStats), TileError> {
+    check_f32_room(scaffold, resolution, 0.0)?;
     let ordered = Ordered::new(scaffold)?;
     tile(&ordered.elements(), solid, resolution).map_err(|e| ordered.tagged(e))
 }
@@ -164,4 +165,70 @@ fn spread(x: u64) -> u64 {
     x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
     x = (x | x << 2) & 0x1249_2492_4924_9249;
     x
+}
+
+/// Refuses a tiling whose promise of distinct vertices `f32` cannot keep where the scaffold
+/// lies.
+///
+/// The tiler keeps every crossing 1/256 of a lattice edge from the edge's ends (`local.rs`),
+/// so that no vertex meets a lattice point's vertex (a cap's, or another crossing's there);
+/// the mesh is then rounded to `f32`, what mesh files store. Far from the origin one `f32`
+/// step can exceed that margin (2⁻¹⁴ ≈ 6.1e-5 at 1000): rounding then puts crossings onto
+/// lattice points and onto each other — duplicate positions and flat triangles (0.25-unit
+/// hexahedra at 1000 tiled at resolution 24: thousands of each). A lattice edge is a corner
+/// edge of its element over `resolution − 1` (exactly so for affine elements: the lattices'
+/// edges are parallel to the element's edges), so the margin is the shortest corner edge
+/// over `256 (resolution − 1)`, and the step is the `f32` step at the largest coordinate
+/// magnitude the output reaches (the nodes', plus `extra_reach`). A margin below the step is
+/// [`TileError::BeyondF32`], naming the highest resolution that would do. A margin above it
+/// does not prove every rounding distinct (two crossings near one lattice point along
+/// different edges may still meet); the mesh check after the tiling has the last word.
+///
+/// Unlike the contourer's (axis-aligned edges, whose crossings are kept inside their edges
+/// in `f32` exactly), the tiler's lattice edges run in any direction through curved maps,
+/// so no per-coordinate rule keeps its vertices apart: refusing is the honest answer.
+pub(super) fn check_f32_room(
+    scaffold: &Scaffold,
+    resolution: usize,
+    extra_reach: f64,
+) -> Result<(), TileError> {
+    // Resolutions below 2 are the tiler's own error (`check_input`).
+    if resolution < 2 {
+        return Ok(());
+    }
+    let node = |n: u32| scaffold.nodes.get(n as usize).copied();
+    let mut shortest = f64::INFINITY;
+    for e in 0..scaffold.element_count() {
+        let nodes = scaffold.element(e);
+        for &[a, b] in scaffold.kind.edges() {
+            if let (Some(p), Some(q)) = (node(nodes[a]), node(nodes[b])) {
+                let length = (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt();
+                // Degenerate elements are the scaffold check's to report.
+                if length > 0.0 {
+                    shortest = shortest.min(length);
+                }
+            }
+        }
+    }
+    let reach = scaffold
+        .nodes
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, v| m.max(v.abs()))
+        + extra_reach.abs();
+    let rounded = reach as f32;
+    let step = f64::from(rounded.next_up()) - f64::from(rounded);
+    let edge = shortest / (resolution - 1) as f64;
+    let margin = edge / 256.0;
+    if !shortest.is_finite() || !step.is_finite() || margin >= step {
+        return Ok(());
+    }
+    Err(TileError::BeyondF32 {
+        resolution,
+        edge_bits: edge.to_bits(),
+        margin_bits: margin.to_bits(),
+        step_bits: step.to_bits(),
+        reach_bits: reach.to_bits(),
+        max_resolution: (shortest / (256.0 * step)).floor() as usize + 1,
+    })
 }

@@ -27,7 +27,7 @@ use crate::mesh_sdf::{MeshSdf, SdfOptions};
 use crate::scaffold::Scaffold;
 
 use super::lattice::{MAX_CORNERS, Weights};
-use super::scaffold::Ordered;
+use super::scaffold::{Ordered, check_f32_room};
 use super::{ChunkSink, TileError, TileStats, TiledSolid, stream_with, tile_with};
 
 /// The skin term of one scaffold: distances to its boundary faces, and the band it matters in.
@@ -175,6 +175,7 @@ pub fn tile_scaffold_with_skin(
     let Some(thickness) = skin else {
         return super::tile_scaffold(scaffold, solid, resolution);
     };
+    check_f32_room(scaffold, resolution, 0.0)?;
     let ordered = Ordered::new(scaffold)?;
     let skin = Skin::new(scaffold, thickness, resolution)?;
     tile_with(&ordered.elements(), solid, Some(&skin), resolution).map_err(|e| ordered.tagged(e))
@@ -192,6 +193,7 @@ pub fn stream_scaffold(
     chunk_elements: usize,
     sink: &mut ChunkSink,
 ) -> Result<TileStats, TileError> {
+    check_f32_room(scaffold, resolution, 0.0)?;
     let ordered = Ordered::new(scaffold)?;
     let skin = skin
         .map(|t| Skin::new(scaffold, t, resolution))

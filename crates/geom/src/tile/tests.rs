@@ -403,3 +403,50 @@ fn shared_face_samples_are_bitwise_equal_from_both_sides() {
         );
     }
 }
+
+/// Far from the origin the tiler's margin (1/256 of a lattice edge) can be less than an `f32`
+/// step: 0.25-unit elements at 1000 (steps of 2⁻¹⁴) tiled at resolution 24 gave thousands of
+/// duplicate positions and flat triangles. Such a lattice is refused, naming the highest
+/// resolution whose margin is a step — here `0.25 / (256 · 2⁻¹⁴) + 1 = 17` — and that one
+/// tiles closed and manifold; so does the refused one nearer the origin.
+#[test]
+fn lattices_too_fine_for_f32_where_the_scaffold_lies_are_refused() {
+    let field = SchwarzP { offset: 0.2 };
+    let solid = TiledSolid::of(&field, Solid::Inside { offset: 0.0 });
+    for kind in [ElementKind::Hex8, ElementKind::Tet4] {
+        let far = grid([1000.0; 3], [1001.0; 3], [4, 4, 4], kind).expect("grid");
+        let refused = |result: Result<_, TileError>| match result {
+            Err(TileError::BeyondF32 {
+                resolution: 24,
+                max_resolution,
+                step_bits,
+                ..
+            }) => {
+                assert_eq!(max_resolution, 17, "{kind:?}");
+                assert_eq!(f64::from_bits(step_bits), 2f64.powi(-14), "{kind:?}");
+            }
+            Err(e) => panic!("{kind:?}: {e}"),
+            Ok(_) => panic!("{kind:?}: tiled at resolution 24"),
+        };
+        refused(tile_scaffold(&far, &solid, 24).map(|_| ()));
+        refused(stream_scaffold(&far, &solid, None, 24, 64, &mut |_| Ok(())).map(|_| ()));
+        let message = tile_scaffold(&far, &solid, 24)
+            .map(|_| ())
+            .unwrap_err()
+            .to_string();
+        assert!(message.contains("resolution of at most 17"), "{message}");
+        for (scaffold, resolution) in [
+            (&far, 17),
+            (
+                &grid([0.0; 3], [1.0; 3], [4, 4, 4], kind).expect("grid"),
+                24,
+            ),
+        ] {
+            let (mesh, _) = tile_scaffold(scaffold, &solid, resolution)
+                .unwrap_or_else(|e| panic!("{kind:?} at {resolution}: {e}"));
+            assert_closed(&mesh);
+            let c = check(&mesh);
+            assert_eq!((c.duplicate_positions, c.degenerate_triangles), (0, 0));
+        }
+    }
+}

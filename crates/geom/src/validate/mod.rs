@@ -103,6 +103,26 @@ pub fn check(mesh: &Mesh) -> MeshCheck {
     }
 }
 
+/// The number of connected pieces of `mesh`: valid triangles are connected when they share a
+/// vertex index (so two solids touching at one vertex are one piece). Meshes read from
+/// formats that store positions (STL) must be welded first. Vertices no valid triangle uses
+/// are not counted.
+pub fn components(mesh: &Mesh) -> usize {
+    let n = mesh.vertices.len();
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    let mut used = vec![false; n];
+    for t in mesh.triangles.iter().filter(|t| is_valid(t, n)) {
+        union(&mut parent, t[0], t[1]);
+        union(&mut parent, t[1], t[2]);
+        for &i in t {
+            used[i as usize] = true;
+        }
+    }
+    (0..n as u32)
+        .filter(|&i| used[i as usize] && find(&mut parent, i) == i)
+        .count()
+}
+
 /// The passes, each parallel inside, run one after the other: with few cores, running them
 /// side by side only adds contention.
 fn analyse<I: Index>(mesh: &Mesh) -> MeshCheck {
@@ -920,6 +940,42 @@ mod tests {
                 .wrapping_add(1_442_695_040_888_963_407);
             ((self.0 >> 33) as u32) % n
         }
+    }
+
+    #[test]
+    fn components_count_pieces_joined_through_shared_vertices() {
+        // Two tetrahedra apart, then sharing one vertex; an unused vertex and an invalid
+        // triangle count for nothing.
+        let tetra = |o: u32| {
+            [
+                [o, o + 1, o + 2],
+                [o, o + 3, o + 1],
+                [o, o + 2, o + 3],
+                [o + 1, o + 3, o + 2],
+            ]
+        };
+        let vertices = vec![[0.0f32; 3]; 9];
+        let mut triangles: Vec<[u32; 3]> = tetra(0).into_iter().chain(tetra(4)).collect();
+        triangles.push([0, 1, 99]);
+        let apart = Mesh {
+            vertices: vertices.clone(),
+            triangles: triangles.clone(),
+        };
+        assert_eq!(components(&apart), 2);
+        // The second tetrahedron's first corner becomes the first's vertex 3.
+        for t in &mut triangles[4..8] {
+            for i in t.iter_mut() {
+                if *i == 4 {
+                    *i = 3;
+                }
+            }
+        }
+        let touching = Mesh {
+            vertices,
+            triangles,
+        };
+        assert_eq!(components(&touching), 1);
+        assert_eq!(components(&Mesh::default()), 0);
     }
 
     #[test]
