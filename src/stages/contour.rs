@@ -9,8 +9,13 @@
 //! lose walls thinner than a sample spacing: the two-level contourer does not combine with a
 //! third surface, and the planar contourer has no two-level variant.
 
-use latticebuild_geom::contour::{BandMesh, contour, contour_band, steepest_at_level};
-use latticebuild_geom::contour2d::{Element2, PlanarRegion, contour_planar, contour_planar_box};
+use latticebuild_geom::contour::{
+    BandMesh, contour, contour_band, steepest_at_level, steepest_at_level_within,
+};
+use latticebuild_geom::contour2d::{
+    Element2, PlanarRegion, contour_planar, contour_planar_band, contour_planar_box,
+    contour_planar_box_band,
+};
 use latticebuild_geom::element::{Element3, contour_clipped, contour_cube_band};
 use latticebuild_geom::field::{Band, Grid, ScalarField, Solid, SolidField, SolidSampler};
 use latticebuild_geom::mesh::Mesh;
@@ -128,7 +133,7 @@ impl ContourStage {
             };
             self.contour_element(&*field, &group, progress, &mut shell)?
         } else if self.planar_domain {
-            self.contour_planar_domain(&*field)?
+            self.contour_planar_domain(&*field, &mut shell)?
         } else {
             let model = Grid::spanning(self.domain_min, self.domain_max, self.samples);
             let cell_grid = model.scaled_down(self.cell_size);
@@ -208,6 +213,24 @@ impl ContourStage {
         }
     }
 
+    /// What the report says of a shell whose contourer did not measure it: its wall measured
+    /// on `f` over `grid` (cell coordinates), in the cubes whose centre `within` takes, marked
+    /// `sampled` (contoured from `|f − c| − w/2`, as over the tetrahedron; callers that
+    /// contour the band say otherwise); `None` for other solids.
+    fn measured_shell(
+        &self,
+        field: &dyn ScalarField,
+        grid: Grid,
+        within: &(dyn Fn([f64; 3]) -> bool + Sync),
+    ) -> Option<ShellSummary> {
+        let band = self.solid.band()?;
+        let middle = band.lo + 0.5 * (band.hi - band.lo);
+        let steepest = steepest_at_level_within(field.sampler(&grid).as_ref(), middle, within);
+        let [nx, ny, nz] = grid.counts;
+        let samples = if nz == 2 { [nx, ny, 1] } else { [nx, ny, nz] };
+        Some(self.shell_summary(band, steepest, samples, true))
+    }
+
     /// Why the solid came out empty, with the cell's field range over the output's samples,
     /// so the user sees how far the offset or thickness is from giving a surface. Sampling
     /// again costs one more pass, but only on this failure path.
@@ -260,12 +283,19 @@ impl ContourStage {
     fn contour_planar_domain(
         &self,
         field: &dyn ScalarField,
+        shell: &mut Option<ShellSummary>,
     ) -> Result<(Mesh, Option<Planar>), String> {
+        let size = self.cell_size;
+        // A shell is the band of the field itself; other solids their implicit function.
+        let band = self.solid.band();
         let solid = SolidField {
             inner: field,
-            solid: self.solid,
+            solid: if band.is_some() {
+                Solid::Inside { offset: 0.0 }
+            } else {
+                self.solid
+            },
         };
-        let size = self.cell_size;
         let value = |p: [f64; 2]| {
             let mut out = [0.0];
             solid.eval_points(&[p[0] / size[0]], &[p[1] / size[1]], &[0.0], &mut out);
@@ -275,8 +305,20 @@ impl ContourStage {
             [self.domain_min[0], self.domain_min[1]],
             [self.domain_max[0], self.domain_max[1]],
         );
-        let region = contour_planar_box(&value, min, max, [self.samples[0], self.samples[1]])
-            .map_err(|e| e.to_string())?;
+        let counts = [self.samples[0], self.samples[1]];
+        let region = match band {
+            Some(band) => contour_planar_box_band(&value, band, min, max, counts),
+            None => contour_planar_box(&value, min, max, counts),
+        }
+        .map_err(|e| e.to_string())?;
+        let cell_min = [min[0] / size[0], min[1] / size[1]];
+        let cell_max = [max[0] / size[0], max[1] / size[1]];
+        *shell = self
+            .measured_shell(field, planar_grid(cell_min, cell_max, counts), &|_| true)
+            .map(|summary| ShellSummary {
+                sampled: false,
+                ..summary
+            });
         let outline = vec![min, [max[0], min[1]], max, [min[0], max[1]]];
         let area = (max[0] - min[0]) * (max[1] - min[1]);
         Ok(planar_output(region, outline, area))
@@ -296,13 +338,31 @@ impl ContourStage {
             inner: field,
             solid: self.solid,
         };
-        let planar = |element: Element2| -> Result<(Mesh, Option<Planar>), String> {
+        let mut planar = |element: Element2| -> Result<(Mesh, Option<Planar>), String> {
+            let (lo, hi) = element.bbox();
+            let measured = self.measured_shell(field, planar_grid(lo, hi, [samples; 2]), &|_| true);
+            // The square's sides are the grid's: a shell is its band. The triangle's third
+            // side is a clip, combined with one sampled function.
+            let band = self.solid.band().filter(|_| element == Element2::Square);
+            *shell = measured.map(|summary| ShellSummary {
+                sampled: band.is_none(),
+                ..summary
+            });
+            let raw = |p: [f64; 2]| {
+                let mut out = [0.0];
+                field.eval_points(&[p[0]], &[p[1]], &[0.0], &mut out);
+                out[0]
+            };
             let value = |p: [f64; 2]| {
                 let mut out = [0.0];
                 solid.eval_points(&[p[0]], &[p[1]], &[0.0], &mut out);
                 out[0]
             };
-            let region = contour_planar(&value, element, samples).map_err(|e| e.to_string())?;
+            let region = match band {
+                Some(band) => contour_planar_band(&raw, band, samples),
+                None => contour_planar(&value, element, samples),
+            }
+            .map_err(|e| e.to_string())?;
             Ok(planar_output(region, element.outline(), element.area()))
         };
         let advance = |n: usize| progress.advance(n);
@@ -322,11 +382,16 @@ impl ContourStage {
                     None,
                 )),
             },
-            Some(ReferenceElement::Tetrahedron) => Ok((
-                contour_clipped(&solid, Element3::Tetrahedron, samples, &advance)
-                    .map_err(|e| e.to_string())?,
-                None,
-            )),
+            Some(ReferenceElement::Tetrahedron) => {
+                let grid = Grid::spanning([-0.5; 3], [0.5; 3], [samples; 3]);
+                let tet = |p: [f64; 3]| Element3::Tetrahedron.signed_distance(p) < 0.0;
+                *shell = self.measured_shell(field, grid, &tet);
+                Ok((
+                    contour_clipped(&solid, Element3::Tetrahedron, samples, &advance)
+                        .map_err(|e| e.to_string())?,
+                    None,
+                ))
+            }
             Some(ReferenceElement::Square) => planar(Element2::Square),
             Some(ReferenceElement::Triangle) => planar(Element2::Triangle),
             None => Err(format!(
@@ -335,6 +400,17 @@ impl ContourStage {
             )),
         }
     }
+}
+
+/// The grid of a planar region's samples from `min` to `max` (cell coordinates), with one
+/// sample step in z from the plane (where a 2D cell's gradient is measured).
+fn planar_grid(min: [f64; 2], max: [f64; 2], counts: [usize; 2]) -> Grid {
+    let step = (max[0] - min[0]) / (counts[0].max(2) - 1) as f64;
+    Grid::spanning(
+        [min[0], min[1], 0.0],
+        [max[0], max[1], step],
+        [counts[0], counts[1], 2],
+    )
 }
 
 /// A planar region's mesh, and its outline inside `frame` (the element or the domain) for the

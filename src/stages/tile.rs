@@ -349,8 +349,7 @@ impl TileStage {
     /// alone the cell is drawn), the thinnest graded thickness and, for a transition, the
     /// steeper cell. An estimate, as the warning says: curved elements stretch the lattice.
     /// At most 64 points per edge are sampled, the gradient scaled to the resolution's
-    /// spacing. A `planar` (2D) region is sampled in the plane z = 0, and contoured from
-    /// `|f − c| − w/2`, not as a band.
+    /// spacing. A 2D region (`element` None) is sampled in the plane z = 0.
     fn shell_summary(&self, solid: &TiledSolid, element: Option<Element3>) -> Option<ShellSummary> {
         let planar = element.is_none();
         let band = solid.solid.band()?;
@@ -381,7 +380,7 @@ impl TileStage {
             thickness,
             thinnest_wall: BandMesh::wall(walls, steepest),
             samples: [self.resolution; 3],
-            sampled: planar,
+            sampled: false,
             tiled: true,
         })
     }
@@ -448,7 +447,6 @@ impl TileStage {
         progress.phase("checking the mesh");
         let summary = MeshSummary::from_check(&validate::check(&mesh));
         Ok(MeshArtifact {
-            // 2D regions are one level: a shell is sampled as `|f − c| − w/2`.
             shell: self.shell_summary(solid, None),
             mesh,
             summary,

@@ -9,6 +9,11 @@
 //! [`contour_planar_box`] does the same over an axis-aligned rectangle (a periodic 2D cell
 //! repeated over a planar domain).
 //!
+//! [`contour_planar_band`] and [`contour_planar_box_band`] contour a shell over the square or a
+//! rectangle as the band `lo < f < hi` of the field itself, cell by cell as the 3D contourer
+//! caps a band on a cube face (`Tables::band_cap`): both levels' crossings, possibly on one
+//! edge, so a wall between two samples is kept (sampled as `|f − c| − w/2` it vanished).
+//!
 //! The face rule is the one the 3D tables use on cube faces (see
 //! [`crate::contour::table`]): in each grid cell the inside part is bounded by segments
 //! separating inside corners from outside ones, and on an ambiguous cell (two inside corners on a
@@ -46,7 +51,10 @@
 //! - Deterministic: a pure function of the arguments, single-threaded.
 //! - NaN samples count as outside.
 
+use crate::contour::table::{CORNER_SLOT, EDGE_CORNERS, HI_SLOT, tables};
+use crate::contour::{apart_in_f32, band_crossing, spans_band};
 use crate::element::lattice_clip;
+use crate::field::Band;
 use crate::mesh::{Mesh, inseparable_edge, round_inside};
 use rayon::prelude::*;
 
@@ -154,15 +162,18 @@ pub enum PlanarError {
     /// Neighbouring samples with no 32-bit float between their roundings (see the 3D
     /// [`crate::contour::ContourError::BeyondF32`]).
     #[error(
-        "the samples are too close together for 32-bit positions (what mesh files store) this far from the origin: along {} samples {index} and {} lie at {} and {}, with no 32-bit value between them; place the domain nearer the origin or use fewer samples",
+        "the samples are too close together for 32-bit positions (what mesh files store) this far from the origin: along {} samples {index} and {} lie at {} and {}, with {} between them; place the domain nearer the origin or use fewer samples",
         ["x", "y"][*axis],
         index + 1,
         f64::from_bits(at_bits[0]),
-        f64::from_bits(at_bits[1])
+        f64::from_bits(at_bits[1]),
+        if *needed > 1 { "fewer than two 32-bit values (a shell's two walls can cross one edge)" } else { "no 32-bit value" }
     )]
     BeyondF32 {
         axis: usize,
         index: usize,
+        /// 32-bit values needed strictly between them: 1, or 2 for a band.
+        needed: usize,
         /// The two coordinates, as bits (keeping the error `Eq`).
         at_bits: [u64; 2],
     },
@@ -208,7 +219,7 @@ pub fn contour_planar(
             }
         }
     };
-    Ok(region_of(&lattice, field))
+    Ok(region_of(&lattice, field, None))
 }
 
 /// Contours `{Φ ≤ 0}` over the rectangle `[min, max]` sampled at `counts` points per axis (at
@@ -220,12 +231,48 @@ pub fn contour_planar_box(
     max: [f64; 2],
     counts: [usize; 2],
 ) -> Result<PlanarRegion, PlanarError> {
+    let lattice = box_lattice(min, max, counts, 1)?;
+    Ok(region_of(&lattice, field, None))
+}
+
+/// Contours the band `lo < f < hi` of the field `f` over the rectangle, as
+/// [`contour_planar_box`] contours one level (module docs).
+pub fn contour_planar_box_band(
+    field: &(dyn Fn([f64; 2]) -> f64 + Sync),
+    band: Band,
+    min: [f64; 2],
+    max: [f64; 2],
+    counts: [usize; 2],
+) -> Result<PlanarRegion, PlanarError> {
+    let lattice = box_lattice(min, max, counts, 2)?;
+    Ok(region_of(&lattice, field, Some(band)))
+}
+
+/// Contours the band `lo < f < hi` of the field `f` over the square element, with `samples`
+/// per axis (the triangle's clipped sides have no band rule: it is sampled as one function).
+pub fn contour_planar_band(
+    field: &(dyn Fn([f64; 2]) -> f64 + Sync),
+    band: Band,
+    samples: usize,
+) -> Result<PlanarRegion, PlanarError> {
+    contour_planar_box_band(field, band, [-0.5; 2], [0.5; 2], [samples; 2])
+}
+
+/// The lattice of a rectangle, refused where `needed` 32-bit values (one per level that may
+/// cross an edge) do not fit between two neighbouring samples.
+fn box_lattice(
+    min: [f64; 2],
+    max: [f64; 2],
+    counts: [usize; 2],
+    needed: usize,
+) -> Result<Lattice, PlanarError> {
     let fewest = counts[0].min(counts[1]);
     if fewest < 2 {
         return Err(PlanarError::TooFewSamples(fewest));
     }
+    // A band has two crossings per edge at most: about five vertices per node.
     let nodes = (counts[0] as u64 + 1).saturating_mul(counts[1] as u64 + 1);
-    if nodes.saturating_mul(3) >= u64::from(u32::MAX) {
+    if nodes.saturating_mul(1 + 2 * needed as u64) >= u64::from(u32::MAX) {
         return Err(PlanarError::TooManySamples(counts[0].max(counts[1])));
     }
     let lattice = Lattice {
@@ -239,20 +286,29 @@ pub fn contour_planar_box(
     };
     for (axis, &count) in counts.iter().enumerate() {
         let coordinate = |i: usize| lattice.point_on(axis, i as f64);
-        if let Some((index, a, b)) = inseparable_edge(count, 1, coordinate) {
+        if let Some((index, a, b)) = inseparable_edge(count, needed, coordinate) {
             return Err(PlanarError::BeyondF32 {
                 axis,
                 index,
+                needed,
                 at_bits: [a.to_bits(), b.to_bits()],
             });
         }
     }
-    Ok(region_of(&lattice, field))
+    Ok(lattice)
 }
 
-fn region_of(lattice: &Lattice, field: &(dyn Fn([f64; 2]) -> f64 + Sync)) -> PlanarRegion {
+/// The region of `field` on `lattice`: `{Φ ≤ 0}`, or the band `lo < f < hi` of `f`.
+fn region_of(
+    lattice: &Lattice,
+    field: &(dyn Fn([f64; 2]) -> f64 + Sync),
+    band: Option<Band>,
+) -> PlanarRegion {
     let values = lattice.sample(field);
-    let (mesh, positions) = march(lattice, &values);
+    let (mesh, positions) = match band {
+        None => march(lattice, &values),
+        Some(band) => march_band(lattice, &values, band),
+    };
     let boundary: Vec<Vec<[f64; 2]>> = boundary_loops(&mesh)
         .iter()
         .map(|l| l.iter().map(|&v| positions[v as usize]).collect())
@@ -331,9 +387,11 @@ fn inside(v: f64) -> bool {
 struct Vertices<'a> {
     lattice: &'a Lattice,
     values: &'a [f64],
+    /// For a band, its levels: `values` are `f`, and each edge may hold both levels' crossings.
+    band: Option<Band>,
     node: Vec<u32>,
-    x_edge: Vec<u32>,
-    y_edge: Vec<u32>,
+    /// Crossings on x- and y-edges (a band's lower level), then a band's upper level's.
+    edges: [Vec<u32>; 4],
     positions: Vec<[f64; 2]>,
     /// `positions` as the mesh stores them.
     rounded: Vec<[f32; 3]>,
@@ -341,16 +399,75 @@ struct Vertices<'a> {
 
 const NONE: u32 = u32::MAX;
 
-impl Vertices<'_> {
+impl<'a> Vertices<'a> {
+    fn new(lattice: &'a Lattice, values: &'a [f64], band: Option<Band>) -> Self {
+        let [nx, ny] = lattice.counts;
+        let hi = |n: usize| {
+            if band.is_some() {
+                vec![NONE; n]
+            } else {
+                Vec::new()
+            }
+        };
+        Vertices {
+            lattice,
+            values,
+            band,
+            node: vec![NONE; nx * ny],
+            edges: [
+                vec![NONE; (nx - 1) * ny],
+                vec![NONE; nx * (ny - 1)],
+                hi((nx - 1) * ny),
+                hi(nx * (ny - 1)),
+            ],
+            positions: Vec::new(),
+            rounded: Vec::new(),
+        }
+    }
+
     fn add(&mut self, p: [f64; 2]) -> u32 {
         self.positions.push(p);
         self.rounded.push([p[0] as f32, p[1] as f32, 0.0]);
         (self.positions.len() - 1) as u32
     }
 
-    /// Adds the crossing a fraction `t` along the edge from node `(i, j)` along `axis`; on a
-    /// rectangle its `f32` coordinate along the edge stays strictly inside the edge.
-    fn add_crossing(&mut self, i: usize, j: usize, axis: usize, t: f64) -> u32 {
+    fn node(&mut self, i: usize, j: usize) -> u32 {
+        let slot = i + self.lattice.counts[0] * j;
+        if self.node[slot] == NONE {
+            self.node[slot] = self.add(self.lattice.point(i as f64, j as f64));
+        }
+        self.node[slot]
+    }
+
+    fn x_edge(&mut self, i: usize, j: usize) -> u32 {
+        self.edge(i, j, 0, false)
+    }
+
+    fn y_edge(&mut self, i: usize, j: usize) -> u32 {
+        self.edge(i, j, 1, false)
+    }
+
+    /// The crossing on the edge from node `(i, j)` along `axis`: of the zero level, or for a
+    /// band of its lower level or (`upper`) its upper level. On a rectangle its `f32`
+    /// coordinate along the edge stays strictly inside the edge, and a band's two crossings
+    /// on one edge apart.
+    fn edge(&mut self, i: usize, j: usize, axis: usize, upper: bool) -> u32 {
+        let nx = self.lattice.counts[0];
+        let (slot, next) = if axis == 0 {
+            (i + (nx - 1) * j, i + 1 + nx * j)
+        } else {
+            (i + nx * j, i + nx * (j + 1))
+        };
+        let table = axis + 2 * usize::from(upper);
+        if self.edges[table][slot] != NONE {
+            return self.edges[table][slot];
+        }
+        let (v0, v1) = (self.values[i + nx * j], self.values[next]);
+        let at = |upper: bool| match self.band {
+            None => crossing(v0, v1),
+            Some(band) => band_crossing(v0, v1, band, upper),
+        };
+        let t = at(upper);
         let lattice = self.lattice;
         let (a, b) = (i as f64, j as f64);
         let p = if axis == 0 {
@@ -365,37 +482,18 @@ impl Vertices<'_> {
                 lattice.point_on(axis, start),
                 lattice.point_on(axis, start + 1.0),
             );
-            self.rounded[id as usize][axis] = round_inside(p[axis], ends.0, ends.1);
+            let rounded = |t: f64| round_inside(lattice.point_on(axis, start + t), ends.0, ends.1);
+            let mut coordinate = round_inside(p[axis], ends.0, ends.1);
+            if self.band.is_some_and(|band| spans_band(v0, v1, band)) {
+                let (t_lo, t_hi) = (at(false), at(true));
+                let (lo, hi) =
+                    apart_in_f32(rounded(t_lo), rounded(t_hi), t_hi > t_lo, ends.0, ends.1);
+                coordinate = if upper { hi } else { lo };
+            }
+            self.rounded[id as usize][axis] = coordinate;
         }
+        self.edges[table][slot] = id;
         id
-    }
-
-    fn node(&mut self, i: usize, j: usize) -> u32 {
-        let slot = i + self.lattice.counts[0] * j;
-        if self.node[slot] == NONE {
-            self.node[slot] = self.add(self.lattice.point(i as f64, j as f64));
-        }
-        self.node[slot]
-    }
-
-    fn x_edge(&mut self, i: usize, j: usize) -> u32 {
-        let nx = self.lattice.counts[0];
-        let slot = i + (nx - 1) * j;
-        if self.x_edge[slot] == NONE {
-            let t = crossing(self.values[i + nx * j], self.values[i + 1 + nx * j]);
-            self.x_edge[slot] = self.add_crossing(i, j, 0, t);
-        }
-        self.x_edge[slot]
-    }
-
-    fn y_edge(&mut self, i: usize, j: usize) -> u32 {
-        let nx = self.lattice.counts[0];
-        let slot = i + nx * j;
-        if self.y_edge[slot] == NONE {
-            let t = crossing(self.values[i + nx * j], self.values[i + nx * (j + 1)]);
-            self.y_edge[slot] = self.add_crossing(i, j, 1, t);
-        }
-        self.y_edge[slot]
     }
 }
 
@@ -410,15 +508,7 @@ enum Item {
 /// which the lattice (positive determinant) keeps counter-clockwise in the plane.
 fn march(lattice: &Lattice, values: &[f64]) -> (Mesh, Vec<[f64; 2]>) {
     let [nx, ny] = lattice.counts;
-    let mut verts = Vertices {
-        lattice,
-        values,
-        node: vec![NONE; nx * ny],
-        x_edge: vec![NONE; (nx - 1) * ny],
-        y_edge: vec![NONE; nx * (ny - 1)],
-        positions: Vec::new(),
-        rounded: Vec::new(),
-    };
+    let mut verts = Vertices::new(lattice, values, None);
     let mut triangles = Vec::new();
     let mut polygon: Vec<Item> = Vec::with_capacity(8);
     for j in 0..ny - 1 {
@@ -458,6 +548,52 @@ fn march(lattice: &Lattice, values: &[f64]) -> (Mesh, Vec<[f64; 2]>) {
             let ids: Vec<u32> = polygon.iter().map(|&item| id(item)).collect();
             for k in 1..ids.len() - 1 {
                 triangles.push([ids[0], ids[k], ids[k + 1]]);
+            }
+        }
+    }
+    (
+        Mesh {
+            vertices: verts.rounded,
+            triangles,
+        },
+        verts.positions,
+    )
+}
+
+/// The band `lo < f < hi` of the samples `values` of `f`, cell by cell: the 3D tables' band
+/// cap on the cube face z = 0 (corners 0–3 are the cell's, x fastest), reversed — caps face
+/// outward, −z there, and regions face +z —, so a 2D band is what a 3D one draws on a face.
+fn march_band(lattice: &Lattice, values: &[f64], band: Band) -> (Mesh, Vec<[f64; 2]>) {
+    /// The cube's face z = 0 in the tables' cap order (`2 · axis + side`).
+    const FACE_Z0: usize = 4;
+    let tables = tables();
+    let [nx, ny] = lattice.counts;
+    let mut verts = Vertices::new(lattice, values, Some(band));
+    let mut triangles = Vec::new();
+    for j in 0..ny - 1 {
+        for i in 0..nx - 1 {
+            let at = |c: u8| (i + usize::from(c & 1), j + usize::from((c >> 1) & 1));
+            let config = |bit: &dyn Fn(f64) -> bool| {
+                (0..4u8).fold(0u8, |bits, c| {
+                    let (a, b) = at(c);
+                    bits | u8::from(bit(values[a + nx * b])) << c
+                })
+            };
+            let p = config(&|v| v > band.lo);
+            let q = config(&|v| v >= band.hi);
+            let mut id = |slot: u8| {
+                if (CORNER_SLOT..HI_SLOT).contains(&slot) {
+                    let (a, b) = at(slot - CORNER_SLOT);
+                    return verts.node(a, b);
+                }
+                let upper = slot >= HI_SLOT;
+                let [c0, c1] = EDGE_CORNERS[usize::from(if upper { slot - HI_SLOT } else { slot })];
+                let (a, b) = at(c0);
+                let axis = if (c0 ^ c1) & 1 != 0 { 0 } else { 1 };
+                verts.edge(a, b, axis, upper)
+            };
+            for tri in tables.band_cap(p, q, FACE_Z0) {
+                triangles.push([id(tri[0]), id(tri[2]), id(tri[1])]);
             }
         }
     }

@@ -2,8 +2,10 @@
 //! boundary loops that are exactly the mesh's boundary edges, and the SVG drawing.
 
 use latticebuild_geom::contour2d::{
-    Element2, PlanarError, PlanarRegion, contour_planar, contour_planar_box,
+    Element2, PlanarError, PlanarRegion, contour_planar, contour_planar_band, contour_planar_box,
+    contour_planar_box_band,
 };
+use latticebuild_geom::field::Band;
 use latticebuild_geom::mesh_io::write_svg;
 use latticebuild_geom::validate::check;
 use std::collections::{HashMap, HashSet};
@@ -382,4 +384,89 @@ fn contour2d_box_far_from_the_origin_keeps_distinct_f32_positions() {
         "{err:?}"
     );
     assert!(err.to_string().contains("along x samples 0 and 1"), "{err}");
+}
+
+/// `cos 2πx + cos 2πy`: its zero set is steeper than 2π per unit everywhere but at saddles.
+fn waves(p: [f64; 2]) -> f64 {
+    (2.0 * PI * p[0]).cos() + (2.0 * PI * p[1]).cos()
+}
+
+/// Fraction of `[0, 2] × [0, 1]` where `lo < waves < hi`, by the midpoint rule.
+fn band_fraction(band: Band) -> f64 {
+    let n = 2000;
+    let mut inside = 0usize;
+    for j in 0..n {
+        for i in 0..2 * n {
+            let v = waves([(i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64]);
+            inside += usize::from(v > band.lo && v < band.hi);
+        }
+    }
+    inside as f64 / (2 * n * n) as f64
+}
+
+/// A shell thinner than a sample spacing, contoured as the band between its levels, keeps
+/// its area and converges; the region keeps every structural invariant. (Sampled as
+/// `|f| − w/2` it vanished wherever the wall fell between two samples.)
+#[test]
+fn contour2d_thin_bands_keep_their_area() {
+    let band = Band {
+        lo: -0.15,
+        hi: 0.15,
+    };
+    let expected = band_fraction(band);
+    let errors: Vec<f64> = [9, 17, 65]
+        .iter()
+        .map(|&per_unit| {
+            let counts = [2 * (per_unit - 1) + 1, per_unit];
+            let r = contour_planar_box_band(&waves, band, [0.0; 2], [2.0, 1.0], counts).unwrap();
+            let areas = assert_consistent(&r, &format!("band at {per_unit}"));
+            (areas.iter().sum::<f64>() / 2.0 / expected - 1.0).abs()
+        })
+        .collect();
+    assert!(errors[0] < 0.1, "relative errors {errors:?}");
+    assert!(errors[2] < 0.01, "relative errors {errors:?}");
+    // Over the square element: the band of the same field, within the element's square.
+    let r = contour_planar_band(&|p: [f64; 2]| waves([p[0] + 0.5, p[1] + 0.5]), band, 65).unwrap();
+    let area: f64 = assert_consistent(&r, "square band").iter().sum();
+    assert!((area / expected - 1.0).abs() < 0.01, "{area} vs {expected}");
+}
+
+/// Far from the origin a band's two crossings on one edge can round to one `f32`: they are
+/// kept apart, so the region has distinct positions and no flat triangle; a grid with room
+/// for one `f32` between samples but not two is refused for a band.
+#[test]
+fn contour2d_far_bands_keep_distinct_f32_positions() {
+    for band in [
+        Band { lo: -0.4, hi: 0.4 },
+        Band {
+            lo: -1e-4,
+            hi: 1e-4,
+        },
+    ] {
+        let r = contour_planar_box_band(&waves, band, [30000.0; 2], [30000.5, 30000.25], [61, 31])
+            .unwrap();
+        let c = check(&r.mesh);
+        assert!(c.manifold && c.triangles > 0, "{band:?}: {c:?}");
+        assert_eq!(
+            (c.duplicate_positions, c.degenerate_triangles),
+            (0, 0),
+            "{band:?}"
+        );
+    }
+    // Near 2^20 f32 steps are 1/8: samples 0.25 apart have one f32 between them.
+    let (min, max) = ([1048576.0, 0.0], [1048577.0, 1.0]);
+    assert!(contour_planar_box(&waves, min, max, [5, 5]).is_ok());
+    let band = Band { lo: -0.1, hi: 0.1 };
+    let err = contour_planar_box_band(&waves, band, min, max, [5, 5]).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            PlanarError::BeyondF32 {
+                axis: 0,
+                needed: 2,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
 }

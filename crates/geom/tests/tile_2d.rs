@@ -622,3 +622,47 @@ fn lattices_too_fine_for_f32_where_a_2d_scaffold_lies_are_refused() {
         assert_eq!((c.duplicate_positions, c.degenerate_triangles), (0, 0));
     }
 }
+
+/// Width of the thin 2D shells below, in field values: under a third of a lattice spacing at 7
+/// points per edge (both cells are steeper than 2π per unit on their zero sets).
+const THIN: f64 = 0.3;
+
+fn square_band(p: [f64; 2]) -> f64 {
+    square_cell(p).abs() - 0.5 * THIN
+}
+
+fn triangle_band(p: [f64; 2]) -> f64 {
+    triangle_cell(p).abs() - 0.5 * THIN
+}
+
+/// A shell of a 2D cell, tiled as the band between its two levels, keeps a wall thinner than
+/// the lattice spacing (sampled as `|f| − w/2` it vanished between samples), stays
+/// edge-manifold with closed loops, and its area converges to the quadrature's.
+#[test]
+fn thin_2d_shells_keep_their_area() {
+    for (kind, cell, phi) in [
+        (
+            ElementKind::Quad4,
+            &SquareCell as &dyn ScalarField,
+            square_band as fn([f64; 2]) -> f64,
+        ),
+        (ElementKind::Tri3, &TriangleCell, triangle_band),
+    ] {
+        let scaffold =
+            grid([0.0; 3], [3.0, 2.0, 0.0], [3, 2, 0], kind).unwrap_or_else(|e| panic!("{e}"));
+        let expected = quadrature_fraction(phi, kind == ElementKind::Tri3);
+        let shell = TiledSolid::of(cell, Solid::Shell { thickness: THIN });
+        let errors: Vec<f64> = [7, 13, 25]
+            .iter()
+            .map(|&n| {
+                let region =
+                    tile_surface_scaffold(&scaffold, &shell, n).unwrap_or_else(|e| panic!("{e}"));
+                boundary_edges(&region, &format!("{kind} at {n}"));
+                (region.area / 6.0 / expected - 1.0).abs()
+            })
+            .collect();
+        eprintln!("{kind}: quadrature {expected:.5}, relative errors {errors:?}");
+        assert!(errors[0] < 0.1, "{kind}: relative errors {errors:?}");
+        assert!(errors[2] < 0.015, "{kind}: relative errors {errors:?}");
+    }
+}

@@ -718,7 +718,7 @@ pub(super) fn corner_gradient_squared(v: &[f64; 8]) -> f64 {
 /// never meet, however thin the band (a band thinner than `m` of an edge is widened to it).
 /// Both are computed from the same two values wherever the edge's owner computes them.
 #[inline]
-fn band_crossing(v0: f64, v1: f64, band: Band, upper: bool) -> f64 {
+pub(crate) fn band_crossing(v0: f64, v1: f64, band: Band, upper: bool) -> f64 {
     let Band { lo, hi } = band;
     let level = if upper { hi } else { lo };
     let below = |v: f64| below_band(v, band);
@@ -756,7 +756,7 @@ fn below_band(v: f64, band: Band) -> bool {
 /// Whether an edge with samples `v0`, `v1` runs from below the band to above it, and so
 /// holds both levels' crossings.
 #[inline]
-fn spans_band(v0: f64, v1: f64, band: Band) -> bool {
+pub(crate) fn spans_band(v0: f64, v1: f64, band: Band) -> bool {
     (below_band(v0, band) && v1 >= band.hi) || (below_band(v1, band) && v0 >= band.hi)
 }
 
@@ -767,7 +767,7 @@ fn spans_band(v0: f64, v1: f64, band: Band) -> bool {
 /// or, at the edge's end, the lower one a step back. Needs two `f32` strictly inside the edge,
 /// which `contour` checks for a band.
 #[inline]
-pub(super) fn apart_in_f32(lo: f32, hi: f32, increasing: bool, a: f64, b: f64) -> (f32, f32) {
+pub(crate) fn apart_in_f32(lo: f32, hi: f32, increasing: bool, a: f64, b: f64) -> (f32, f32) {
     if lo != hi {
         return (lo, hi);
     }

@@ -42,6 +42,7 @@
 //! as they are.
 
 mod chunk;
+pub(crate) use chunk::{apart_in_f32, band_crossing, spans_band};
 pub mod table;
 
 use rayon::prelude::*;

@@ -7,6 +7,10 @@
 //! quad's facets (01, 12, 23, 30). The symmetry group is D4: the orbit representative of
 //! `(i, j)` folds each coordinate to `min(c, n − 1 − c)` and sorts the pair.
 //!
+//! A band (a shell: the part between two levels) is drawn cell by cell as the 3D contourer caps
+//! a band on a cube face (`Tables::band_cap` on the face z = 0, turned to face +z), so it too
+//! is what a 3D tiling draws on a face.
+//!
 //! Invariants: the local mesh is the filled region `{Φ < 0}` as triangles, counter-clockwise in
 //! ξ (the lattice map `(i, j) ↦ ξ` is a positive scaling), with vertices on lattice edges
 //! (crossings) or lattice points (inside corners); there are no caps (a region is closed by
@@ -14,6 +18,7 @@
 
 use super::lattice::{Lattice, Weights};
 use super::local::{LocalBuilder, LocalMesh, Samples, inside};
+use crate::contour::table::{CORNER_SLOT, EDGE_CORNERS, HI_SLOT, tables};
 
 /// The quad's corners as 0/1 per axis, in Gmsh order.
 const SQUARE_CORNERS: [[u32; 2]; 4] = [[0, 0], [1, 0], [1, 1], [0, 1]];
@@ -88,13 +93,15 @@ impl Lattice for SquareLattice {
     }
 
     fn takes_bands(&self) -> bool {
-        false
+        true
     }
 
     fn contour(&self, samples: Samples) -> LocalMesh {
-        // A 2D region is one level: shells of 2D cells are sampled as `|f − c| − w/2`.
+        if let Some(upper) = samples.upper {
+            return self.contour_band(samples.lower, upper);
+        }
         let values = samples.lower;
-        let mut builder = LocalBuilder::new(Samples::one(values), 0);
+        let mut builder = LocalBuilder::new(samples, 0);
         let last = self.n - 2;
         let mut polygon: Vec<u32> = Vec::with_capacity(8);
         for j in 0..=last {
@@ -137,6 +144,53 @@ impl Lattice for SquareLattice {
                         .mesh
                         .triangles
                         .push([polygon[0], polygon[k], polygon[k + 1]]);
+                }
+            }
+        }
+        builder.finish()
+    }
+}
+
+impl SquareLattice {
+    /// The band where both `lower` and `upper` are negative ([`Samples`]), cell by cell: the
+    /// cube tables' band cap on the face z = 0 (its corners 0–3 are the cell's, x fastest),
+    /// reversed, since caps face outward (−z there) and regions face +z.
+    fn contour_band(&self, lower: &[f64], upper: &[f64]) -> LocalMesh {
+        /// The cube's face z = 0 in the tables' cap order (`2 · axis + side`).
+        const FACE_Z0: usize = 4;
+        let tables = tables();
+        let mut builder = LocalBuilder::new(
+            Samples {
+                lower,
+                upper: Some(upper),
+            },
+            0,
+        );
+        let last = self.n - 2;
+        for j in 0..=last {
+            for i in 0..=last {
+                let corner = |c: u8| {
+                    let c = u32::from(c);
+                    self.index([i + (c & 1), j + ((c >> 1) & 1)])
+                };
+                let config_of = |bit: &dyn Fn(usize) -> bool| {
+                    (0..4u8).fold(0u8, |bits, c| bits | u8::from(bit(corner(c) as usize)) << c)
+                };
+                let p = config_of(&|p| inside(lower[p]));
+                let q = config_of(&|p| upper[p] >= 0.0);
+                for tri in tables.band_cap(p, q, FACE_Z0) {
+                    let t = [tri[0], tri[2], tri[1]].map(|slot| {
+                        if slot < CORNER_SLOT {
+                            let [a, b] = EDGE_CORNERS[slot as usize];
+                            builder.crossing(corner(a), corner(b))
+                        } else if slot < HI_SLOT {
+                            builder.point(corner(slot - CORNER_SLOT))
+                        } else {
+                            let [a, b] = EDGE_CORNERS[(slot - HI_SLOT) as usize];
+                            builder.level_crossing(corner(a), corner(b), true)
+                        }
+                    });
+                    builder.mesh.triangles.push(t);
                 }
             }
         }

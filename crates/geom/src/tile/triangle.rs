@@ -16,7 +16,7 @@
 //! (the map `(u, v) ↦ ξ` has positive determinant), no caps.
 
 use super::lattice::{Lattice, Weights};
-use super::local::{LocalBuilder, LocalMesh, Samples, inside};
+use super::local::{BandState, LocalBuilder, LocalMesh, Samples, band_state, inside};
 use crate::scaffold::ElementKind;
 
 pub struct TriangleLattice {
@@ -53,25 +53,53 @@ impl TriangleLattice {
     }
 
     /// Marching triangles on the small triangle `q` (counter-clockwise): the inside corners
-    /// and crossings in cyclic order, fanned.
+    /// and crossings in cyclic order, fanned. For a band, the corners between its levels and
+    /// both levels' crossings, in the order the sides meet them: all on the triangle's
+    /// perimeter, in order, so the polygon is convex.
     fn march(&self, builder: &mut LocalBuilder, q: [u32; 3]) {
-        let ins = q.map(|p| inside(builder.value(p)));
-        if !ins.iter().any(|&b| b) {
-            return;
-        }
-        let mut polygon: [u32; 4] = [0; 4];
+        let samples = builder.samples();
+        // At most the 3 corners and 2 crossings per side.
+        let mut polygon: [u32; 9] = [0; 9];
         let mut len = 0;
-        for k in 0..3 {
-            if ins[k] {
-                polygon[len] = builder.point(q[k]);
-                len += 1;
+        let mut push = |id: u32| {
+            polygon[len] = id;
+            len += 1;
+        };
+        match samples.upper {
+            None => {
+                let ins = q.map(|p| inside(builder.value(p)));
+                for k in 0..3 {
+                    if ins[k] {
+                        push(builder.point(q[k]));
+                    }
+                    if ins[k] != ins[(k + 1) % 3] {
+                        push(builder.crossing(q[k], q[(k + 1) % 3]));
+                    }
+                }
             }
-            if ins[k] != ins[(k + 1) % 3] {
-                polygon[len] = builder.crossing(q[k], q[(k + 1) % 3]);
-                len += 1;
+            Some(upper) => {
+                let state = q.map(|p| band_state(samples.lower, upper, p as usize));
+                for k in 0..3 {
+                    let (from, to) = (state[k], state[(k + 1) % 3]);
+                    if from == BandState::Between {
+                        push(builder.point(q[k]));
+                    }
+                    let lower = (from == BandState::Below) != (to == BandState::Below);
+                    let high = (from == BandState::Above) != (to == BandState::Above);
+                    let levels = if from == BandState::Above {
+                        [(high, true), (lower, false)]
+                    } else {
+                        [(lower, false), (high, true)]
+                    };
+                    for (crossed, upper) in levels {
+                        if crossed {
+                            push(builder.level_crossing(q[k], q[(k + 1) % 3], upper));
+                        }
+                    }
+                }
             }
         }
-        for k in 1..len - 1 {
+        for k in 1..len.saturating_sub(1) {
             builder
                 .mesh
                 .triangles
@@ -116,13 +144,11 @@ impl Lattice for TriangleLattice {
     }
 
     fn takes_bands(&self) -> bool {
-        false
+        true
     }
 
     fn contour(&self, samples: Samples) -> LocalMesh {
-        // A 2D region is one level: shells of 2D cells are sampled as `|f − c| − w/2`.
-        let values = samples.lower;
-        let mut builder = LocalBuilder::new(Samples::one(values), 0);
+        let mut builder = LocalBuilder::new(samples, 0);
         let m = self.m;
         for v in 0..m {
             for u in 0..m - v {
