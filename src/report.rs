@@ -43,7 +43,7 @@ pub struct Report {
     /// fraction is over the scaffold's volume).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tiling: Option<TilingSummary>,
-    /// For a shell contoured over a box: its thinnest wall in sample spacings (see
+    /// For a shell: its thinnest wall in sample spacings, or lattice spacings when tiled (see
     /// [`ShellSummary::thinnest_wall`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub thinnest_wall: Option<f64>,

@@ -87,7 +87,14 @@ pub struct ShellSummary {
     /// band between two levels: a wall between two samples is then lost, not just coarse.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub sampled: bool,
+    /// Tiled into a scaffold: `samples` is the resolution, walls are in lattice spacings of
+    /// the reference element (an estimate where elements are curved or stretched).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub tiled: bool,
 }
+
+/// The tiler's highest resolution (points per element edge).
+const MAX_RESOLUTION: u64 = 256;
 
 impl ShellSummary {
     /// Walls thinner than this many sample spacings are warned about: below it a wall is
@@ -100,23 +107,39 @@ impl ShellSummary {
     pub fn warning(&self) -> Option<String> {
         let wall = self.thinnest_wall.filter(|&w| w < Self::THIN_WALL)?;
         let factor = Self::THIN_WALL / wall;
-        let more: Vec<String> = self
-            .samples
-            .iter()
-            .map(|&n| (((n - 1) as f64 * factor).ceil() as u64 + 1).to_string())
-            .collect();
+        let more = |n: usize| ((n - 1) as f64 * factor).ceil() as u64 + 1;
         let effect = if self.sampled {
-            "poorly resolved, and confined to a part the thinner ones can vanish"
+            "poorly resolved, and the thinner ones can vanish (this solid is sampled as one \
+             function, not contoured from its two levels)"
         } else {
             "poorly resolved"
         };
+        let (spacings, advice) = if self.tiled {
+            let resolution = more(self.samples[0]);
+            let advice = if resolution > MAX_RESOLUTION {
+                return Some(format!(
+                    "the thinnest shell wall is about {wall:.2} lattice spacings (thickness {} \
+                     over the steepest field gradient); walls under {} spacings are {effect}, \
+                     and even the highest resolution ({MAX_RESOLUTION}) leaves it under {}: \
+                     use a larger thickness",
+                    self.thickness,
+                    Self::THIN_WALL,
+                    Self::THIN_WALL,
+                ));
+            } else {
+                format!("`resolution = {resolution}`")
+            };
+            ("lattice spacings", advice)
+        } else {
+            let counts: Vec<String> = self.samples.iter().map(|&n| more(n).to_string()).collect();
+            ("sample spacings", format!("{} samples", counts.join(" × ")))
+        };
         Some(format!(
-            "the thinnest shell wall is about {wall:.2} sample spacings (thickness {} over the \
-             steepest field gradient); walls under {} spacings are {effect}: use about {} \
-             samples, or a larger thickness",
+            "the thinnest shell wall is about {wall:.2} {spacings} (thickness {} over the \
+             steepest field gradient); walls under {} spacings are {effect}: use about \
+             {advice}, or a larger thickness",
             self.thickness,
             Self::THIN_WALL,
-            more.join(" × ")
         ))
     }
 }

@@ -45,6 +45,9 @@ const TAIL_BYTES: u64 = 40;
 pub struct ChunkedHead {
     pub summary: MeshSummary,
     pub tiling: Option<TilingSummary>,
+    /// For a shell, its wall (see [`super::artifact::MeshArtifact::shell`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shell: Option<super::artifact::ShellSummary>,
 }
 
 /// Where one chunk's record is and what it holds.
@@ -452,6 +455,7 @@ mod tests {
         let head = ChunkedHead {
             summary: summary(),
             tiling: None,
+            shell: None,
         };
         writer.finish(head).expect("memory").0
     }
@@ -512,6 +516,7 @@ mod tests {
         let head = ChunkedHead {
             summary: summary(),
             tiling: None,
+            shell: None,
         };
         let (bytes, trailer, check) = writer.finish(head).expect("memory");
         let json = serde_json::to_vec(&trailer).expect("json");

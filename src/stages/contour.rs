@@ -204,6 +204,7 @@ impl ContourStage {
             thinnest_wall: BandMesh::wall(band, steepest),
             samples,
             sampled,
+            tiled: false,
         }
     }
 

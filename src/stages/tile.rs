@@ -28,18 +28,20 @@
 //! - `extrude`/`thickness_normal` on a 3D scaffold, `skin` on a 2D one, and `extrude` on a
 //!   curved surface are errors naming the file and its element kind.
 
+use latticebuild_geom::contour::{BandMesh, steepest_at_level_within};
+use latticebuild_geom::element::Element3;
 use latticebuild_geom::expr;
-use latticebuild_geom::field::{ScalarField, Solid};
+use latticebuild_geom::field::{Band, Grid, ScalarField, Solid};
 use latticebuild_geom::mesh::{Mesh, MeshChunk};
 use latticebuild_geom::scaffold::{self, ElementKind, Scaffold};
 use latticebuild_geom::tile::{
-    RegionError, TiledRegion, TiledSolid, Transition, chunk_elements_for, extrude, region_svg,
-    stream_scaffold, thickness_normal, tile_surface_scaffold,
+    RegionError, TiledRegion, TiledSolid, Transition, chunk_elements_for, extrude,
+    reference_element, region_svg, stream_scaffold, thickness_normal, tile_surface_scaffold,
 };
 use latticebuild_geom::validate::{self, StreamCheck};
 use std::sync::Arc;
 
-use super::artifact::{MeshArtifact, MeshSummary, Planar, TilingSummary};
+use super::artifact::{MeshArtifact, MeshSummary, Planar, ShellSummary, TilingSummary};
 use super::chunked::ChunkedHead;
 use super::symmetric::{FittedPayload, group_of};
 use crate::build::StageProgress;
@@ -327,6 +329,7 @@ impl TileStage {
             ));
         }
         Ok(TileOutput::Chunked(ChunkedHead {
+            shell: self.shell_summary(&solid, reference_element(scaffold.kind)),
             summary: MeshSummary::from_check(&check),
             tiling: Some(TilingSummary {
                 element: scaffold.kind.name().to_string(),
@@ -337,6 +340,50 @@ impl TileStage {
                 region_area: None,
             }),
         }))
+    }
+
+    /// What the report says of a tiled shell's wall (`None` for other solids): its thinnest
+    /// part in lattice spacings, `thickness / |∇Φ|` with the steepest `|∇Φ|` per lattice step
+    /// where the shell's middle level crosses the reference element's cube lattice
+    /// (`steepest_at_level`, over the cubes inside the reference element for 3D ones, where
+    /// alone the cell is drawn), the thinnest graded thickness and, for a transition, the
+    /// steeper cell. An estimate, as the warning says: curved elements stretch the lattice.
+    /// At most 64 points per edge are sampled, the gradient scaled to the resolution's
+    /// spacing. A `planar` (2D) region is sampled in the plane z = 0, and contoured from
+    /// `|f − c| − w/2`, not as a band.
+    fn shell_summary(&self, solid: &TiledSolid, element: Option<Element3>) -> Option<ShellSummary> {
+        let planar = element.is_none();
+        let band = solid.solid.band()?;
+        let middle = band.lo + 0.5 * (band.hi - band.lo);
+        let thickness = solid.thickness.map_or(band.hi - band.lo, |t| {
+            t.iter().copied().fold(f64::INFINITY, f64::min)
+        });
+        let n = self.resolution.min(64);
+        let grid = if planar {
+            // One lattice step in z, from the plane: the gradient within it.
+            let step = 1.0 / (n - 1) as f64;
+            Grid::spanning([-0.5, -0.5, 0.0], [0.5, 0.5, step], [n, n, 2])
+        } else {
+            Grid::spanning([-0.5; 3], [0.5; 3], [n; 3])
+        };
+        let fields = std::iter::once(solid.cell).chain(solid.transition.as_ref().map(|t| t.to));
+        let within = |p: [f64; 3]| element.is_none_or(|e| e.signed_distance(p) < 0.0);
+        let steepest = fields
+            .map(|field| steepest_at_level_within(field.sampler(&grid).as_ref(), middle, &within))
+            .fold(0.0, f64::max)
+            * (n - 1) as f64
+            / (self.resolution - 1) as f64;
+        let walls = Band {
+            lo: middle - 0.5 * thickness,
+            hi: middle + 0.5 * thickness,
+        };
+        Some(ShellSummary {
+            thickness,
+            thinnest_wall: BandMesh::wall(walls, steepest),
+            samples: [self.resolution; 3],
+            sampled: planar,
+            tiled: true,
+        })
     }
 
     /// A 2D scaffold: its region, drawn when planar, or the closed solid made of it.
@@ -401,7 +448,8 @@ impl TileStage {
         progress.phase("checking the mesh");
         let summary = MeshSummary::from_check(&validate::check(&mesh));
         Ok(MeshArtifact {
-            shell: None,
+            // 2D regions are one level: a shell is sampled as `|f − c| − w/2`.
+            shell: self.shell_summary(solid, None),
             mesh,
             summary,
             planar,

@@ -162,7 +162,7 @@ impl WriteStage {
                     planar_element_area: None,
                     domain: None,
                     tiling: head.tiling.clone(),
-                    shell: None,
+                    shell: head.shell.clone(),
                 });
             }
         };

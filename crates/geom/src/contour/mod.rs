@@ -157,7 +157,22 @@ pub fn contour_band(
 /// part). The same cubes and the same estimate as [`contour_band`]'s for a band about `level`;
 /// a maximum, so the same for any number of threads.
 pub fn steepest_at_level(sampler: &dyn PlaneSampler, level: f64) -> f64 {
-    let [nx, ny, nz] = sampler.grid().counts;
+    steepest_at_level_within(sampler, level, &|_| true)
+}
+
+/// [`steepest_at_level`] over the cubes whose centre `within` accepts (model coordinates):
+/// the reference element's, for a tiled cell whose field outside it is never drawn.
+pub fn steepest_at_level_within(
+    sampler: &dyn PlaneSampler,
+    level: f64,
+    within: &(dyn Fn([f64; 3]) -> bool + Sync),
+) -> f64 {
+    let grid = *sampler.grid();
+    let centre = |i: usize, j: usize, k: usize| {
+        let at = [i, j, k];
+        std::array::from_fn(|a| grid.origin[a] + (at[a] as f64 + 0.5) * grid.spacing[a])
+    };
+    let [nx, ny, nz] = grid.counts;
     if nx < 2 || ny < 2 || nz < 2 {
         return 0.0;
     }
@@ -190,7 +205,7 @@ pub fn steepest_at_level(sampler: &dyn PlaneSampler, level: f64) -> f64 {
                         ];
                         // Crossed: some corner above the level, some not (NaN is not above).
                         let above = v.iter().filter(|&&x| x > level).count();
-                        if above == 0 || above == 8 {
+                        if above == 0 || above == 8 || !within(centre(i, j, k)) {
                             continue;
                         }
                         steepest_squared = steepest_squared.max(chunk::corner_gradient_squared(&v));

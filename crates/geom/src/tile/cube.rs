@@ -6,8 +6,8 @@
 //! the same at z = +½); faces in the tables' cap order `2·axis + side`.
 
 use super::lattice::{Lattice, Weights};
-use super::local::{LocalBuilder, LocalMesh, inside};
-use crate::contour::table::{CORNER_SLOT, EDGE_CORNERS, tables};
+use super::local::{LocalBuilder, LocalMesh, Samples, inside};
+use crate::contour::table::{CORNER_SLOT, EDGE_CORNERS, HI_SLOT, tables};
 pub use crate::scaffold::HEX_CORNERS;
 
 pub struct CubeLattice {
@@ -84,10 +84,15 @@ impl Lattice for CubeLattice {
         &self.face_masks
     }
 
-    fn contour(&self, values: &[f64]) -> LocalMesh {
+    fn takes_bands(&self) -> bool {
+        true
+    }
+
+    fn contour(&self, samples: Samples) -> LocalMesh {
         let tables = tables();
         let last = self.n - 2;
-        let mut builder = LocalBuilder::new(values, 6);
+        let lower = samples.lower;
+        let mut builder = LocalBuilder::new(samples, 6);
         for k in 0..=last {
             for j in 0..=last {
                 for i in 0..=last {
@@ -95,24 +100,50 @@ impl Lattice for CubeLattice {
                         let c = u32::from(c);
                         self.index([i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2)])
                     };
-                    let config = (0..8u8).fold(0u8, |bits, c| {
-                        bits | u8::from(inside(values[corner(c) as usize])) << c
-                    });
+                    let config_of = |bit: &dyn Fn(usize) -> bool| {
+                        (0..8u8).fold(0u8, |bits, c| bits | u8::from(bit(corner(c) as usize)) << c)
+                    };
+                    let on_face = [i == 0, i == last, j == 0, j == last, k == 0, k == last];
                     let vertex = |builder: &mut LocalBuilder, slot: u8| {
                         if slot < CORNER_SLOT {
                             let [a, b] = EDGE_CORNERS[slot as usize];
                             builder.crossing(corner(a), corner(b))
-                        } else {
+                        } else if slot < HI_SLOT {
                             builder.point(corner(slot - CORNER_SLOT))
+                        } else {
+                            let [a, b] = EDGE_CORNERS[(slot - HI_SLOT) as usize];
+                            builder.level_crossing(corner(a), corner(b), true)
                         }
                     };
-                    for tri in tables.triangles(config) {
+                    let Some(upper) = samples.upper else {
+                        let config = config_of(&|p| inside(lower[p]));
+                        for tri in tables.triangles(config) {
+                            let t = tri.map(|s| vertex(&mut builder, s));
+                            builder.mesh.triangles.push(t);
+                        }
+                        for face in (0..6).filter(|&f| on_face[f]) {
+                            for tri in tables.cap(config, face) {
+                                let t = tri.map(|s| vertex(&mut builder, s));
+                                builder.mesh.caps[face].push(t);
+                            }
+                        }
+                        continue;
+                    };
+                    // A band, as the box contourer takes it (`contour::table`): `p` the corners
+                    // above the lower level, `q ⊆ p` those at or above the upper one; `p`'s
+                    // surface on the lower crossings, `q`'s reversed on the upper ones.
+                    let p = config_of(&|p| inside(lower[p]));
+                    let q = config_of(&|p| upper[p] >= 0.0);
+                    for tri in tables.triangles(p) {
                         let t = tri.map(|s| vertex(&mut builder, s));
                         builder.mesh.triangles.push(t);
                     }
-                    let on_face = [i == 0, i == last, j == 0, j == last, k == 0, k == last];
-                    for (face, _) in on_face.iter().enumerate().filter(|(_, on)| **on) {
-                        for tri in tables.cap(config, face) {
+                    for tri in tables.triangles(q) {
+                        let t = [tri[0], tri[2], tri[1]].map(|s| vertex(&mut builder, HI_SLOT + s));
+                        builder.mesh.triangles.push(t);
+                    }
+                    for face in (0..6).filter(|&f| on_face[f]) {
+                        for tri in tables.band_cap(p, q, face) {
                             let t = tri.map(|s| vertex(&mut builder, s));
                             builder.mesh.caps[face].push(t);
                         }

@@ -21,8 +21,9 @@ use super::lattice::Weights;
 /// No face: the slot lies on an element edge or node (or is used by caps only).
 pub const NO_FACE: u8 = u8::MAX;
 
-/// A slot's key in a face's rank frame: its ends' `(rank, weight)` lists, the smaller first.
-type RankKey = (Vec<(u8, u32)>, Vec<(u8, u32)>);
+/// A slot's key in a face's rank frame: its ends' `(rank, weight)` lists, the smaller first,
+/// and whether it is a band's upper level's crossing.
+type RankKey = (Vec<(u8, u32)>, Vec<(u8, u32)>, bool);
 
 /// The vertices of one face in one rank order of its corners.
 struct RankTable {
@@ -48,10 +49,11 @@ pub struct FacePlan {
 }
 
 impl FacePlan {
-    /// The plan for shared vertices with weights `ends` (`a`, optional `b`) used by surface
-    /// triangles (`surface`); `face_masks` are the element's faces.
+    /// The plan for shared vertices with weights `ends` (`a`, optional `b`, and whether it is
+    /// a band's upper level's crossing) used by surface triangles (`surface`); `face_masks`
+    /// are the element's faces.
     pub fn new(
-        ends: &[(Weights, Option<Weights>)],
+        ends: &[(Weights, Option<Weights>, bool)],
         surface: &[bool],
         face_masks: &[u8],
     ) -> FacePlan {
@@ -64,7 +66,7 @@ impl FacePlan {
         let mut face_of = vec![NO_FACE; ends.len()];
         let mut index_on_face = vec![0u32; ends.len()];
         let mut face_slots: Vec<Vec<u32>> = vec![Vec::new(); face_masks.len()];
-        for (s, (a, b)) in ends.iter().enumerate() {
+        for (s, (a, b, _)) in ends.iter().enumerate() {
             let mask = a.mask() | b.map_or(0, |b| b.mask());
             let mut containing = face_masks
                 .iter()
@@ -94,12 +96,12 @@ impl FacePlan {
                         l.sort_unstable();
                         l
                     };
-                    let (a, b) = &ends[s as usize];
+                    let (a, b, upper) = &ends[s as usize];
                     let (a, b) = (list(a), b.as_ref().map(list).unwrap_or_default());
                     if b.is_empty() || a <= b {
-                        (a, b)
+                        (a, b, *upper)
                     } else {
-                        (b, a)
+                        (b, a, *upper)
                     }
                 };
                 let mut keyed: Vec<(RankKey, u32)> =

@@ -12,7 +12,7 @@
 //! positive and listed in increasing corner order; the face masks are the element's faces in
 //! the order its contourer numbers its caps.
 
-use super::local::LocalMesh;
+use super::local::{LocalMesh, Samples};
 
 /// Most corners an element has (the cube's eight).
 pub const MAX_CORNERS: usize = 8;
@@ -30,8 +30,11 @@ pub trait Lattice: Sync {
     fn weights(&self, p: u32) -> Weights;
     /// Corner bit masks of the element's faces, in cap order.
     fn face_masks(&self) -> &[u8];
-    /// Contours `values` (one per index; negative inside) into a local mesh with caps per face.
-    fn contour(&self, values: &[f64]) -> LocalMesh;
+    /// Contours `samples` (one per index; negative inside, or a band between two levels) into a
+    /// local mesh with caps per face. The 2D lattices take one level only.
+    fn contour(&self, samples: Samples) -> LocalMesh;
+    /// Whether [`Lattice::contour`] takes a band (the 3D lattices do).
+    fn takes_bands(&self) -> bool;
 }
 
 /// A point's corner weights: `(local corner, weight)` pairs with weight > 0, in increasing

@@ -56,6 +56,7 @@ use crate::element::Element3;
 use crate::field::{ScalarField, Solid};
 use crate::mesh::{Mesh, MeshChunk};
 use lattice::{Lattice, Weights};
+use local::Samples;
 use shape::{Order, Shape};
 use weld::{Corners, Locals, Welder};
 
@@ -414,9 +415,13 @@ fn stream_on(
     let chunks = count.div_ceil(per_chunk).max(1);
     let mut welder = Welder::new(elements, lattice, chunks > 1)?;
     let cell = symmetric_samples(lattice, solid.cell);
+    let band = lattice.takes_bands() && solid.solid.band().is_some();
     if solid.is_uniform() && skin.is_none() {
-        let values: Vec<f64> = cell.iter().map(|&v| solid.solid.apply(v)).collect();
-        let local = lattice.contour(&values);
+        let mut values = vec![f64::NAN; lattice.index_len() * if band { 2 } else { 1 }];
+        for (p, &v) in cell.iter().enumerate() {
+            set_sample(&mut values, p, solid.solid, v, band, |v| v);
+        }
+        let local = lattice.contour(samples_in(&values, band));
         pipeline(
             chunks,
             |_| welder.chunk(per_chunk, Locals::Uniform(&local)),
@@ -432,10 +437,10 @@ fn stream_on(
             let locals: Vec<local::LocalMesh> = range
                 .into_par_iter()
                 .map_init(
-                    || vec![f64::NAN; lattice.index_len()],
+                    || vec![f64::NAN; lattice.index_len() * if band { 2 } else { 1 }],
                     |values, e| {
-                        samples.fill(e, values);
-                        lattice.contour(values)
+                        samples.fill(e, values, band);
+                        lattice.contour(samples_in(values, band))
                     },
                 )
                 .collect();
@@ -608,8 +613,9 @@ impl<'s> ElementSamples<'s> {
         }
     }
 
-    /// The samples of element `e` into `values`.
-    fn fill(&self, e: usize, values: &mut [f64]) {
+    /// The samples of element `e` into `values` (both levels', for a `band`: see
+    /// [`samples_in`]).
+    fn fill(&self, e: usize, values: &mut [f64], band: bool) {
         let solid = self.solid;
         let nodes = self.nodes.element(e);
         let corners = &nodes[..self.shape.corner_count()];
@@ -642,11 +648,48 @@ impl<'s> ElementSamples<'s> {
                 solid.thickness.map(|_| thickness),
                 solid.offset.map(|_| offset),
             );
-            values[p] = graded.apply(phi);
-            if let Some(skin) = skin {
-                values[p] = skin.apply(values[p], corners, &point.weights);
-            }
+            set_sample(values, p, graded, phi, band, |v| match skin {
+                Some(skin) => skin.apply(v, corners, &point.weights),
+                None => v,
+            });
         });
+    }
+}
+
+/// Sets point `p`'s samples of `solid` for cell value `phi`, each passed through `skin` (the
+/// skin is a union, `min(·, s)`, which distributes over a band's two levels). One level: the
+/// solid's implicit function at `values[p]`. A band (a shell on a 3D lattice): `lo − phi` at
+/// `values[p]` and `phi − hi` in the second half ([`Samples`]).
+#[inline]
+fn set_sample(
+    values: &mut [f64],
+    p: usize,
+    solid: Solid,
+    phi: f64,
+    band: bool,
+    skin: impl Fn(f64) -> f64,
+) {
+    match solid.band().filter(|_| band) {
+        Some(levels) => {
+            let half = values.len() / 2;
+            values[p] = skin(levels.lo - phi);
+            values[half + p] = skin(phi - levels.hi);
+        }
+        None => values[p] = skin(solid.apply(phi)),
+    }
+}
+
+/// The samples in `values`: one level, or (`band`) the lower level's in the first half and
+/// the upper level's in the second.
+fn samples_in(values: &[f64], band: bool) -> Samples<'_> {
+    if band {
+        let (lower, upper) = values.split_at(values.len() / 2);
+        Samples {
+            lower,
+            upper: Some(upper),
+        }
+    } else {
+        Samples::one(values)
     }
 }
 

@@ -99,7 +99,7 @@ fn shared_edge_samples_are_bitwise_equal_from_both_sides() {
         let (mut compared, mut points) = (0usize, 0usize);
         for (e, element) in scaffold.connectivity.chunks_exact(per).enumerate() {
             let corner_nodes = &element[..corners];
-            samples.fill(e, &mut values);
+            samples.fill(e, &mut values, false);
             for q in (0..lattice.index_len() as u32).filter(|&q| lattice.is_point(q)) {
                 let w = lattice.weights(q);
                 if !lattice.face_masks().iter().any(|&f| w.mask() & !f == 0) {

@@ -468,7 +468,7 @@ fn graded_values_are_bitwise_equal_from_both_sides_of_every_shared_face() {
         let mut out = [0; MAX_NODES];
         for e in 0..scaffold.element_count() {
             let element = scaffold.element(e);
-            samples.fill(e, &mut values);
+            samples.fill(e, &mut values, false);
             for q in points(lattice) {
                 let w = lattice.weights(q);
                 if !lattice.face_masks().iter().any(|&f| w.mask() & !f == 0) {
@@ -614,7 +614,7 @@ fn overshooting_transition_weights_are_clamped_after_interpolation() {
     let samples =
         ElementSamples::new(lattice, &solid, cell.clone(), nodes).unwrap_or_else(|e| panic!("{e}"));
     let mut values = vec![f64::NAN; lattice.index_len()];
-    samples.fill(0, &mut values);
+    samples.fill(0, &mut values, false);
     let (mut clamped, mut blended) = (0, 0);
     for p in points(lattice) {
         let x = scaffold.map(0, lattice.xi(p))[0];

@@ -14,7 +14,7 @@
 //! corner `i`.
 
 use super::lattice::{Lattice, Weights};
-use super::local::{LocalBuilder, LocalMesh, inside};
+use super::local::{BandState, LocalBuilder, LocalMesh, Samples, band_state, inside};
 
 pub struct TetLattice {
     /// Cells per edge.
@@ -92,8 +92,12 @@ impl Lattice for TetLattice {
         &[0b1110, 0b1101, 0b1011, 0b0111]
     }
 
-    fn contour(&self, values: &[f64]) -> LocalMesh {
-        let mut builder = LocalBuilder::new(values, 4);
+    fn takes_bands(&self) -> bool {
+        true
+    }
+
+    fn contour(&self, samples: Samples) -> LocalMesh {
+        let mut builder = LocalBuilder::new(samples, 4);
         let m = self.m;
         for w in 0..m {
             for v in 0..m - w {
@@ -130,10 +134,20 @@ impl Lattice for TetLattice {
 }
 
 impl TetLattice {
-    /// Marching tetrahedra on one small tetrahedron `q`, oriented by positions in lattice
-    /// coordinates (an orientation-preserving affine image of ξ).
+    /// Marching tetrahedra on one small tetrahedron `q`, for each level of the samples.
     fn march(&self, builder: &mut LocalBuilder, q: [u32; 4]) {
-        let values = builder_values(builder, &q);
+        let samples = builder.samples();
+        self.march_level(builder, q, samples.lower, false);
+        if let Some(upper) = samples.upper {
+            self.march_level(builder, q, upper, true);
+        }
+    }
+
+    /// Marching tetrahedra of one level (negative inside), oriented by positions in lattice
+    /// coordinates (an orientation-preserving affine image of ξ). A band's two levels each
+    /// bound their own side of the band, so neither is reversed.
+    fn march_level(&self, builder: &mut LocalBuilder, q: [u32; 4], level: &[f64], upper: bool) {
+        let values = q.map(|p| level[p as usize]);
         let ins: Vec<usize> = (0..4).filter(|&i| inside(values[i])).collect();
         let outs: Vec<usize> = (0..4).filter(|&i| !inside(values[i])).collect();
         let pos = q.map(|p| self.position(p));
@@ -152,35 +166,50 @@ impl TetLattice {
                 } else {
                     (centroid, pos[lone])
                 };
-                self.emit(builder, &q, &pos, tri, from, to);
+                self.emit(builder, &q, &pos, tri, [from, to], upper);
             }
             2 => {
                 let (a, b, c, d) = (ins[0], ins[1], outs[0], outs[1]);
                 let from = mean(&[pos[a], pos[b]]);
                 let to = mean(&[pos[c], pos[d]]);
-                self.emit(builder, &q, &pos, [(a, c), (a, d), (b, d)], from, to);
-                self.emit(builder, &q, &pos, [(a, c), (b, d), (b, c)], from, to);
+                self.emit(
+                    builder,
+                    &q,
+                    &pos,
+                    [(a, c), (a, d), (b, d)],
+                    [from, to],
+                    upper,
+                );
+                self.emit(
+                    builder,
+                    &q,
+                    &pos,
+                    [(a, c), (b, d), (b, c)],
+                    [from, to],
+                    upper,
+                );
             }
             _ => {}
         }
     }
 
-    /// Emits the triangle on the edges `tri` of `q`, turned so its normal points `from → to`.
+    /// Emits the triangle on the edges `tri` of `q`, turned so its normal points `from → to`,
+    /// on the crossings of the lower (or only) level or, `upper`, a band's upper level.
     fn emit(
         &self,
         builder: &mut LocalBuilder,
         q: &[u32; 4],
         pos: &[P3; 4],
         mut tri: [(usize, usize); 3],
-        from: P3,
-        to: P3,
+        [from, to]: [P3; 2],
+        upper: bool,
     ) {
         let mid = |(i, j): (usize, usize)| mean(&[pos[i], pos[j]]);
         let [p0, p1, p2] = tri.map(mid);
         if det(sub(p1, p0), sub(p2, p0), sub(to, from)) < 0.0 {
             tri.swap(1, 2);
         }
-        let ids = tri.map(|(i, j)| builder.crossing(q[i], q[j]));
+        let ids = tri.map(|(i, j)| builder.level_crossing(q[i], q[j], upper));
         builder.mesh.triangles.push(ids);
     }
 
@@ -226,35 +255,63 @@ impl TetLattice {
         }
     }
 
+    /// The solid's part of one small triangle `tri` of a face: its inside corners and
+    /// crossings in cyclic order (for a band, the between corners and both levels'
+    /// crossings), a convex polygon fanned and turned outward.
     fn cap_triangle(&self, builder: &mut LocalBuilder, face: usize, tri: [u32; 3], outward: P3) {
-        let values = builder_values(builder, &tri);
-        // The polygon: inside corners and crossings in cyclic order, with positions for
-        // orientation (crossings at edge midpoints).
-        let mut polygon: Vec<(u32, u32)> = Vec::with_capacity(4);
-        for k in 0..3 {
-            let (p, q) = (tri[k], tri[(k + 1) % 3]);
-            if inside(values[k]) {
-                polygon.push((p, p));
+        let samples = builder.samples();
+        // (p, q, upper): a crossing of edge p–q, or the point p when p == q.
+        let mut polygon: Vec<(u32, u32, bool)> = Vec::with_capacity(7);
+        match samples.upper {
+            None => {
+                let ins = tri.map(|p| inside(samples.lower[p as usize]));
+                for k in 0..3 {
+                    let (p, q) = (tri[k], tri[(k + 1) % 3]);
+                    if ins[k] {
+                        polygon.push((p, p, false));
+                    }
+                    if ins[k] != ins[(k + 1) % 3] {
+                        polygon.push((p, q, false));
+                    }
+                }
             }
-            if inside(values[k]) != inside(values[(k + 1) % 3]) {
-                polygon.push((p, q));
+            Some(upper) => {
+                let state = tri.map(|p| band_state(samples.lower, upper, p as usize));
+                for k in 0..3 {
+                    let (p, q) = (tri[k], tri[(k + 1) % 3]);
+                    let (from, to) = (state[k], state[(k + 1) % 3]);
+                    if from == BandState::Between {
+                        polygon.push((p, p, false));
+                    }
+                    // The levels crossed from `p` to `q`, in the order they are met.
+                    let lower = (from == BandState::Below) != (to == BandState::Below);
+                    let high = (from == BandState::Above) != (to == BandState::Above);
+                    let levels = if from == BandState::Above {
+                        [(high, true), (lower, false)]
+                    } else {
+                        [(lower, false), (high, true)]
+                    };
+                    for (crossed, upper) in levels {
+                        if crossed {
+                            polygon.push((p, q, upper));
+                        }
+                    }
+                }
             }
         }
         if polygon.len() < 3 {
             return;
         }
-        let at = |(p, q): (u32, u32)| mean(&[self.position(p), self.position(q)]);
-        let flip = {
-            let (p0, p1, p2) = (at(polygon[0]), at(polygon[1]), at(polygon[2]));
-            det(sub(p1, p0), sub(p2, p0), outward) < 0.0
-        };
+        // The polygon runs around `tri` in its order: `tri`'s own orientation decides.
+        let [p0, p1, p2] = tri.map(|p| self.position(p));
+        let flip = det(sub(p1, p0), sub(p2, p0), outward) < 0.0;
         let ids: Vec<u32> = polygon
             .iter()
-            .map(|&(p, q)| {
+            .map(|&(p, q, upper)| {
                 if p == q {
                     builder.point(p)
                 } else {
-                    builder.crossing(p, q)
+                    builder.level_crossing(p, q, upper)
                 }
             })
             .collect();
@@ -267,10 +324,6 @@ impl TetLattice {
             builder.mesh.caps[face].push(t);
         }
     }
-}
-
-fn builder_values<const N: usize>(builder: &LocalBuilder, q: &[u32; N]) -> [f64; N] {
-    q.map(|p| builder.value(p))
 }
 
 fn mean(points: &[P3]) -> P3 {

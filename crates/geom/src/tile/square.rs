@@ -13,7 +13,7 @@
 //! its boundary loops, not by faces).
 
 use super::lattice::{Lattice, Weights};
-use super::local::{LocalBuilder, LocalMesh, inside};
+use super::local::{LocalBuilder, LocalMesh, Samples, inside};
 
 /// The quad's corners as 0/1 per axis, in Gmsh order.
 const SQUARE_CORNERS: [[u32; 2]; 4] = [[0, 0], [1, 0], [1, 1], [0, 1]];
@@ -87,8 +87,14 @@ impl Lattice for SquareLattice {
         &[0b0011, 0b0110, 0b1100, 0b1001]
     }
 
-    fn contour(&self, values: &[f64]) -> LocalMesh {
-        let mut builder = LocalBuilder::new(values, 0);
+    fn takes_bands(&self) -> bool {
+        false
+    }
+
+    fn contour(&self, samples: Samples) -> LocalMesh {
+        // A 2D region is one level: shells of 2D cells are sampled as `|f − c| − w/2`.
+        let values = samples.lower;
+        let mut builder = LocalBuilder::new(Samples::one(values), 0);
         let last = self.n - 2;
         let mut polygon: Vec<u32> = Vec::with_capacity(8);
         for j in 0..=last {

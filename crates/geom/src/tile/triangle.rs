@@ -16,7 +16,7 @@
 //! (the map `(u, v) ↦ ξ` has positive determinant), no caps.
 
 use super::lattice::{Lattice, Weights};
-use super::local::{LocalBuilder, LocalMesh, inside};
+use super::local::{LocalBuilder, LocalMesh, Samples, inside};
 use crate::scaffold::ElementKind;
 
 pub struct TriangleLattice {
@@ -115,8 +115,14 @@ impl Lattice for TriangleLattice {
         &[0b011, 0b110, 0b101]
     }
 
-    fn contour(&self, values: &[f64]) -> LocalMesh {
-        let mut builder = LocalBuilder::new(values, 0);
+    fn takes_bands(&self) -> bool {
+        false
+    }
+
+    fn contour(&self, samples: Samples) -> LocalMesh {
+        // A 2D region is one level: shells of 2D cells are sampled as `|f − c| − w/2`.
+        let values = samples.lower;
+        let mut builder = LocalBuilder::new(Samples::one(values), 0);
         let m = self.m;
         for v in 0..m {
             for u in 0..m - v {

@@ -48,6 +48,8 @@ use crate::mesh::MeshChunk;
 struct SharedVertex {
     a: Weights,
     b: Option<Weights>,
+    /// A band's upper level's crossing (its lower level's crossing on the same edge differs).
+    upper: bool,
     caps: u8,
 }
 
@@ -244,7 +246,7 @@ fn vertex_name(corners: &[u32], v: &SharedVertex) -> u128 {
             })
     };
     let a = list(&v.a);
-    let mut h = Hasher128::new(u64::from(v.b.is_some()));
+    let mut h = Hasher128::new(u64::from(v.b.is_some()) | u64::from(v.upper) << 1);
     match &v.b {
         None => a.iter().for_each(|&x| h.add(x)),
         Some(b) => {
@@ -415,7 +417,12 @@ impl Classified {
             let mask = a.mask() | b.map_or(0, |b| b.mask());
             if on_face(mask) {
                 shared_index[i] = shared.len() as u32;
-                shared.push(SharedVertex { a, b, caps: 0 });
+                shared.push(SharedVertex {
+                    a,
+                    b,
+                    upper: v.upper,
+                    caps: 0,
+                });
             }
         }
         // Vertices only caps use (inside lattice points on faces) exist in an element only
@@ -613,7 +620,11 @@ impl<'a> Welder<'a> {
         {
             let classified = Classified::new(lattice, local);
             let plan = (lattice.face_masks().len() <= MAX_FACES).then(|| {
-                let ends: Vec<_> = classified.shared.iter().map(|v| (v.a, v.b)).collect();
+                let ends: Vec<_> = classified
+                    .shared
+                    .iter()
+                    .map(|v| (v.a, v.b, v.upper))
+                    .collect();
                 let surface: Vec<bool> = classified.shared.iter().map(|v| v.caps == 0).collect();
                 FacePlan::new(&ends, &surface, lattice.face_masks())
             });
@@ -1114,7 +1125,7 @@ mod tests {
                 per,
             };
             let samples = super::super::symmetric_samples(lattice.as_ref(), &SchwarzP(0.4));
-            let local = lattice.contour(&samples);
+            let local = lattice.contour(super::super::local::Samples::one(&samples));
             for per_chunk in [elements.count().max(1), 37] {
                 let ([structural, named], by) =
                     weld_both_ways(&elements, lattice.as_ref(), &local, per_chunk);
