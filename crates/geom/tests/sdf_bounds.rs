@@ -260,11 +260,18 @@ fn a_box_whose_sides_overflow_is_an_error_not_a_mesh() {
         matches!(e, ContourError::BadBox(ref b) if b.starts_with("[-1e308,1e308]×")),
         "{e}"
     );
-    // Wide but finite sides still sample, and give a mesh of finite vertices.
+    // Wide sides within `f32` still sample, and give a mesh of finite vertices; beyond it
+    // (1e307) the written positions could not hold them, which is the contourer's refusal.
     let wide = Aabb {
-        min: [-1e307; 3],
-        max: [1e307; 3],
+        min: [-1e30; 3],
+        max: [1e30; 3],
     };
     let mesh = sdf::mesh(&field, &wide, [6, 6, 6]).expect("finite spacing");
     assert!(mesh.vertices.iter().flatten().all(|c| c.is_finite()));
+    let beyond = Aabb {
+        min: [-1e307; 3],
+        max: [1e307; 3],
+    };
+    let e = sdf::mesh(&field, &beyond, [6, 6, 6]).expect_err("beyond f32");
+    assert!(matches!(e, ContourError::BeyondF32 { .. }), "{e}");
 }
