@@ -463,7 +463,8 @@ impl<'a> Vertices<'a> {
             return self.edges[table][slot];
         }
         let (v0, v1) = (self.values[i + nx * j], self.values[next]);
-        let at = |upper: bool| match self.band {
+        let band = self.band;
+        let at = |upper: bool| match band {
             None => crossing(v0, v1),
             Some(band) => band_crossing(v0, v1, band, upper),
         };
@@ -484,7 +485,7 @@ impl<'a> Vertices<'a> {
             );
             let rounded = |t: f64| round_inside(lattice.point_on(axis, start + t), ends.0, ends.1);
             let mut coordinate = round_inside(p[axis], ends.0, ends.1);
-            if self.band.is_some_and(|band| spans_band(v0, v1, band)) {
+            if band.is_some_and(|band| spans_band(v0, v1, band)) {
                 let (t_lo, t_hi) = (at(false), at(true));
                 let (lo, hi) =
                     apart_in_f32(rounded(t_lo), rounded(t_hi), t_hi > t_lo, ends.0, ends.1);
