@@ -52,8 +52,9 @@ use crate::manifest::{
 };
 
 /// 3: quadratic elements interpolate nodal values through all their nodes; weights clamped
-/// after interpolation. 4: chunks of about 500k triangles (were 2M).
-pub const VERSION: u32 = 4;
+/// after interpolation. 4: chunks of about 500k triangles (were 2M). 5: shells contoured as
+/// the band between their two levels, and their wall measured (`shell` in the head).
+pub const VERSION: u32 = 5;
 
 /// Triangles per chunk asked of the producer, about. Chunk boundaries are in the payload's
 /// bytes, so in its hash: the chunk size is a function of the resolution (in the key) alone,
