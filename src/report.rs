@@ -34,6 +34,13 @@ pub struct Report {
     pub area: f64,
     /// Volume over the domain's volume; for a planar region (2D cell), area over the element's.
     pub volume_fraction: f64,
+    /// Solid pieces of the mesh (connected surfaces of positive volume, so a cavity inside a
+    /// piece is not one; for a planar region, connected parts); more than one is warned
+    /// about: a lattice that falls apart into loose pieces is rarely what was meant.
+    pub components: u64,
+    /// The largest piece's share of the volume (of the area, for a planar region), each
+    /// piece measured within its outer surface.
+    pub largest_component_fraction: f64,
     /// A planar region of a 2D cell (open by nature: `watertight` is false).
     pub planar: bool,
     /// For an SDF output, the box it was contoured over (its bounds, when not given).
@@ -47,8 +54,8 @@ pub struct Report {
     /// [`ShellSummary::thinnest_wall`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub thinnest_wall: Option<f64>,
-    /// What the build found worth saying about this output (a wall thinner than
-    /// [`ShellSummary::THIN_WALL`] sample spacings).
+    /// What the build found worth saying about this output: more than one piece, a wall
+    /// thinner than [`ShellSummary::THIN_WALL`] sample spacings.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
     pub bbox: Bbox,
@@ -99,12 +106,17 @@ impl Report {
             sdf_box: result.written.domain.map(|[min, max]| Bbox { min, max }),
             tiling: result.written.tiling.clone(),
             thinnest_wall: result.written.shell.as_ref().and_then(|s| s.thinnest_wall),
-            warnings: result
-                .written
-                .shell
-                .as_ref()
-                .and_then(ShellSummary::warning)
+            components: s.components,
+            largest_component_fraction: s.largest_component_fraction,
+            warnings: pieces_warning(s.components, s.largest_component_fraction, planar)
                 .into_iter()
+                .chain(
+                    result
+                        .written
+                        .shell
+                        .as_ref()
+                        .and_then(ShellSummary::warning),
+                )
                 .collect(),
             bbox: Bbox {
                 min: s.bbox_min,
@@ -161,6 +173,15 @@ impl Report {
             Some(t) => format!(" in {} {} elements", t.elements, t.element),
             None => String::new(),
         };
+        let validity = if self.components > 1 {
+            format!(
+                "{validity}, {} pieces (the largest {})",
+                self.components,
+                percent(self.largest_component_fraction)
+            )
+        } else {
+            validity
+        };
         format!(
             "{}: {} triangles, {} vertices{tiled}, {validity}, volume fraction {:.4} -> {} ({:.2} s, {cached} of {} stages cached)",
             self.name,
@@ -171,6 +192,30 @@ impl Report {
             seconds,
             self.stages.len()
         )
+    }
+}
+
+/// The warning for a mesh of more than one piece, with the largest piece's share.
+fn pieces_warning(components: u64, largest: f64, planar: bool) -> Option<String> {
+    (components > 1).then(|| {
+        format!(
+            "the mesh is {components} separate pieces; the largest holds {} of the {}: loose \
+             pieces fall out of a print (check the offset or thickness, or the cell's fit)",
+            percent(largest),
+            if planar { "area" } else { "volume" }
+        )
+    })
+}
+
+/// A fraction as a percentage with two significant decimals where small (`0.3 %`, `97 %`).
+fn percent(fraction: f64) -> String {
+    let p = 100.0 * fraction;
+    if p >= 10.0 {
+        format!("{p:.0} %")
+    } else if p >= 1.0 {
+        format!("{p:.1} %")
+    } else {
+        format!("{p:.2} %")
     }
 }
 
@@ -193,7 +238,22 @@ fn defects(watertight: bool, manifold: bool, planar: bool) -> Vec<String> {
 
 #[cfg(test)]
 mod tests {
-    use super::defects;
+    use super::{defects, percent, pieces_warning};
+
+    #[test]
+    fn more_than_one_piece_is_a_warning_with_the_largest_share() {
+        assert_eq!(pieces_warning(1, 1.0, false), None);
+        let warning = pieces_warning(5166, 0.003, false).expect("warned");
+        assert!(
+            warning.starts_with(
+                "the mesh is 5166 separate pieces; the largest holds 0.30 % of the volume"
+            ),
+            "{warning}"
+        );
+        assert!(pieces_warning(2, 0.6, true).is_some_and(|w| w.contains("60 % of the area")));
+        assert_eq!(percent(0.5), "50 %");
+        assert_eq!(percent(0.0123), "1.2 %");
+    }
 
     #[test]
     fn a_solid_must_be_closed_and_manifold_a_planar_region_manifold() {

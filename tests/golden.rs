@@ -79,7 +79,7 @@ fn summarize(report: &serde_json::Value) -> String {
         format!("[{:.6}, {:.6}, {:.6}]", num(&a[0]), num(&a[1]), num(&a[2]))
     };
     format!(
-        "output {}\n  triangles {}\n  vertices {}\n  watertight {}\n  manifold {}\n  euler_characteristic {}\n  volume {:.6e}\n  area {:.6e}\n  volume_fraction {:.6}\n  bbox {} {}\n",
+        "output {}\n  triangles {}\n  vertices {}\n  watertight {}\n  manifold {}\n  euler_characteristic {}\n  volume {:.6e}\n  area {:.6e}\n  volume_fraction {:.6}\n  components {} (largest {:.6})\n  bbox {} {}\n",
         report["name"].as_str().expect("name"),
         report["triangles"],
         report["vertices"],
@@ -89,22 +89,26 @@ fn summarize(report: &serde_json::Value) -> String {
         num(&report["volume"]),
         num(&report["area"]),
         num(&report["volume_fraction"]),
+        report["components"],
+        num(&report["largest_component_fraction"]),
         vec3(&report["bbox"]["min"]),
         vec3(&report["bbox"]["max"]),
     ) + &tiling(report)
         + &warnings(report)
 }
 
-/// A line per warning of the report (a thin shell wall), with the wall it measured.
+/// A shell's measured wall, and a line per warning of the report (loose pieces, a thin wall).
 fn warnings(report: &serde_json::Value) -> String {
+    let wall = report["thinnest_wall"]
+        .as_f64()
+        .map_or(String::new(), |wall| format!("  thinnest_wall {wall:.4}\n"));
     let Some(warnings) = report["warnings"].as_array() else {
-        return String::new();
+        return wall;
     };
-    let wall = report["thinnest_wall"].as_f64().expect("a warned wall");
-    warnings
+    wall + &warnings
         .iter()
-        .map(|w| format!("  warning (wall {wall:.4}) {}\n", w.as_str().expect("text")))
-        .collect()
+        .map(|w| format!("  warning {}\n", w.as_str().expect("text")))
+        .collect::<String>()
 }
 
 /// The tiling line of a tiled output's report (nothing for other outputs).

@@ -8,7 +8,7 @@
 use serde::{Deserialize, Serialize};
 
 use latticebuild_geom::mesh::Mesh;
-use latticebuild_geom::validate::MeshCheck;
+use latticebuild_geom::validate::{self, MeshCheck, Pieces};
 
 #[cfg(not(target_endian = "little"))]
 compile_error!("mesh payloads store raw little-endian arrays");
@@ -33,9 +33,31 @@ pub struct MeshSummary {
     pub nonmanifold_vertices: u64,
     pub degenerate_triangles: u64,
     pub duplicate_positions: u64,
+    /// Solid pieces (connected surfaces of positive volume; a cavity's surface is not one),
+    /// and the largest one's share of the volume (of the area, for a planar region).
+    #[serde(default)]
+    pub components: u64,
+    #[serde(default)]
+    pub largest_component_fraction: f64,
 }
 
 impl MeshSummary {
+    /// The summary of a whole mesh: its check and its pieces (measured by area for a planar
+    /// region, by volume for a solid).
+    pub fn of_mesh(mesh: &Mesh, planar: bool) -> MeshSummary {
+        MeshSummary::from_check(&validate::check(mesh)).with_pieces(&validate::pieces(mesh), planar)
+    }
+
+    /// With the pieces found in the mesh.
+    pub fn with_pieces(self, pieces: &Pieces, planar: bool) -> MeshSummary {
+        MeshSummary {
+            components: pieces.count(planar) as u64,
+            largest_component_fraction: pieces.largest_fraction(planar),
+            ..self
+        }
+    }
+
+    /// The check's part of the summary (no pieces yet: see [`MeshSummary::with_pieces`]).
     pub fn from_check(c: &MeshCheck) -> MeshSummary {
         MeshSummary {
             triangles: c.triangles as u64,
@@ -53,6 +75,8 @@ impl MeshSummary {
             nonmanifold_vertices: c.nonmanifold_vertices as u64,
             degenerate_triangles: c.degenerate_triangles as u64,
             duplicate_positions: c.duplicate_positions as u64,
+            components: 0,
+            largest_component_fraction: 0.0,
         }
     }
 }

@@ -428,6 +428,8 @@ mod tests {
             nonmanifold_vertices: 0,
             degenerate_triangles: 0,
             duplicate_positions: 0,
+            components: 1,
+            largest_component_fraction: 1.0,
         }
     }
 

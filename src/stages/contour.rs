@@ -20,7 +20,6 @@ use latticebuild_geom::element::{Element3, contour_clipped, contour_cube_band};
 use latticebuild_geom::field::{Band, Grid, ScalarField, Solid, SolidField, SolidSampler};
 use latticebuild_geom::mesh::Mesh;
 use latticebuild_geom::symmetric::{Group, ReferenceElement};
-use latticebuild_geom::validate;
 use latticebuild_geom::within::WithinSampler;
 
 use super::artifact::{MeshArtifact, MeshSummary, Planar, ShellSummary};
@@ -179,7 +178,7 @@ impl ContourStage {
             return Err(self.why_empty(&*field, part.is_some()));
         }
         progress.phase("checking the mesh");
-        let summary = MeshSummary::from_check(&validate::check(&mesh));
+        let summary = MeshSummary::of_mesh(&mesh, planar.is_some());
         Ok(MeshArtifact {
             mesh,
             summary,

@@ -22,7 +22,8 @@ use crate::build::StageProgress;
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::{SdfOutput, SdfResolution, voxel_samples};
 
-pub const VERSION: u32 = 1;
+/// 2: the summary counts the mesh's connected pieces.
+pub const VERSION: u32 = 2;
 
 /// The signed distance of the mesh in `bytes`, read in the format its content shows (the
 /// extension of `given` when the content does not tell); errors name `given`.
@@ -179,7 +180,8 @@ impl SdfStage {
         };
         let contoured = contour_field(&field, bounds, &samples, progress)?;
         Ok(MeshArtifact {
-            summary: MeshSummary::from_check(&contoured.check),
+            summary: MeshSummary::from_check(&contoured.check)
+                .with_pieces(&validate::pieces(&contoured.mesh), false),
             mesh: contoured.mesh,
             planar: None,
             domain: Some([contoured.domain.min, contoured.domain.max]),

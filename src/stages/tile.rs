@@ -38,7 +38,7 @@ use latticebuild_geom::tile::{
     RegionError, TiledRegion, TiledSolid, Transition, chunk_elements_for, extrude,
     reference_element, region_svg, stream_scaffold, thickness_normal, tile_surface_scaffold,
 };
-use latticebuild_geom::validate::{self, StreamCheck};
+use latticebuild_geom::validate::{PieceCounter, StreamCheck};
 use std::sync::Arc;
 
 use super::artifact::{MeshArtifact, MeshSummary, Planar, ShellSummary, TilingSummary};
@@ -306,6 +306,7 @@ impl TileStage {
         // `stream_scaffold`'s sink): its parallel parts share both threads with the tiling,
         // where a check thread of its own was the pipeline's slowest stage.
         let mut check = StreamCheck::new();
+        let mut pieces = PieceCounter::new();
         let stats = stream_scaffold(
             &scaffold,
             &solid,
@@ -316,7 +317,8 @@ impl TileStage {
                 let chunk = Arc::new(chunk);
                 // Handed on first, so the writers encode while this thread checks.
                 chunks(Arc::clone(&chunk))?;
-                check.push(&chunk);
+                // Both on the pool: the piece count is serial, the check parallel inside.
+                rayon::join(|| check.push(&chunk), || pieces.push(&chunk));
                 Ok(())
             },
         )
@@ -331,7 +333,7 @@ impl TileStage {
         }
         Ok(TileOutput::Chunked(ChunkedHead {
             shell: self.shell_summary(&solid, reference_element(scaffold.kind)),
-            summary: MeshSummary::from_check(&check),
+            summary: MeshSummary::from_check(&check).with_pieces(&pieces.finish(), false),
             tiling: Some(TilingSummary {
                 element: scaffold.kind.name().to_string(),
                 elements: stats.elements as u64,
@@ -446,7 +448,7 @@ impl TileStage {
             ));
         }
         progress.phase("checking the mesh");
-        let summary = MeshSummary::from_check(&validate::check(&mesh));
+        let summary = MeshSummary::of_mesh(&mesh, planar.is_some());
         Ok(MeshArtifact {
             shell: self.shell_summary(solid, None),
             mesh,

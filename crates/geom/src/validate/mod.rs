@@ -63,8 +63,10 @@ use crate::mesh::Mesh;
 use rayon::prelude::*;
 
 mod closed_fan;
+mod pieces;
 mod stream;
 use closed_fan::closed_fan;
+pub use pieces::{Piece, PieceCounter, Pieces, pieces};
 pub use stream::StreamCheck;
 
 /// The measurements and verdicts of [`check`]. Counts follow the module definitions.
