@@ -167,7 +167,7 @@ pub enum PlanarError {
         index + 1,
         f64::from_bits(at_bits[0]),
         f64::from_bits(at_bits[1]),
-        if *needed > 1 { "fewer than two 32-bit values (a shell's two walls can cross one edge)" } else { "no 32-bit value" }
+        crate::mesh::room_wanting(*needed)
     )]
     BeyondF32 {
         axis: usize,

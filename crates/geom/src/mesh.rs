@@ -56,6 +56,15 @@ pub(crate) fn separable(a: f64, b: f64, needed: usize) -> bool {
     lo.is_finite() && hi.is_finite() && inner < hi
 }
 
+/// What an edge without room for `needed` `f32` values lacks, for the contourers' errors.
+pub(crate) fn room_wanting(needed: usize) -> &'static str {
+    if needed > 1 {
+        "fewer than two 32-bit values (a shell's two walls can cross one edge)"
+    } else {
+        "no 32-bit value"
+    }
+}
+
 /// The first edge `i → i + 1` of the grid coordinates `coordinate(0..count)` that
 /// [`separable`] refuses (with `needed` values inside), with the two coordinates.
 pub(crate) fn inseparable_edge(

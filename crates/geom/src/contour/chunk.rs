@@ -172,12 +172,7 @@ impl ChunkContext<'_> {
     /// Position of the crossing on the edge from sample value `v0` to `v1`, as a fraction.
     #[inline]
     fn crossing(v0: f64, v1: f64) -> f64 {
-        let t = v0 / (v0 - v1);
-        if t.is_finite() {
-            t.clamp(EDGE_MARGIN, 1.0 - EDGE_MARGIN)
-        } else {
-            0.5
-        }
+        crossing_fraction(v0, v1)
     }
 
     /// Position of a crossing on the edge from sample `at` to the next along `axis`, whose
@@ -711,31 +706,44 @@ pub(super) fn corner_gradient_squared(v: &[f64; 8]) -> f64 {
 }
 
 /// Position of a band level's crossing on the edge from `v0` to `v1` (samples of `f`), as a
-/// fraction. Alone on its edge it is the level's linear crossing kept [`EDGE_MARGIN`] from
-/// the ends, as for one level. An edge from below the band to above it holds both levels'
-/// crossings: measured from the end below, the lower one is kept in
-/// `[m, 1 − 2m]` and the upper one in `[lower + m, 1 − m]` (`m` the margin), so that the two
-/// never meet, however thin the band (a band thinner than `m` of an edge is widened to it).
-/// Both are computed from the same two values wherever the edge's owner computes them.
+/// fraction: [`band_fraction`] of the levels' functions `lo − f` and `f − hi`.
 #[inline]
 pub(crate) fn band_crossing(v0: f64, v1: f64, band: Band, upper: bool) -> f64 {
     let Band { lo, hi } = band;
-    let level = if upper { hi } else { lo };
-    let below = |v: f64| below_band(v, band);
-    if !spans_band(v0, v1, band) {
-        return ChunkContext::crossing(v0 - level, v1 - level);
+    band_fraction([lo - v0, lo - v1], [v0 - hi, v1 - hi], upper)
+}
+
+/// Position of a band level's crossing on an edge, as a fraction from its first end, from
+/// the two levels' functions at its ends, each negative on the band's side: `lower` (as
+/// `lo − f`, at or above 0 below the band, NaN too) and `upper` (as `f − hi`, at or above 0
+/// above it); the levels may vary along the edge. Alone on its edge a level's crossing is
+/// its linear one kept [`EDGE_MARGIN`] from the ends, as for one level. An edge from below
+/// the band to above it holds both levels' crossings: measured from the end below, the lower
+/// one is kept in `[m, 1 − 2m]` and the upper one in `[lower + m, 1 − m]` (`m` the margin),
+/// so that the two never meet, however thin the band (a band thinner than `m` of an edge is
+/// widened to it). Both are computed from the same four values wherever the edge's owner
+/// computes them. (With `lower = lo − f` the quotients are exact negations of those in `f −
+/// lo`, so the box contourer's crossings are the same bits either way.)
+#[inline]
+pub(crate) fn band_fraction(lower: [f64; 2], upper: [f64; 2], upper_level: bool) -> f64 {
+    let below = |k: usize| lower[k].partial_cmp(&0.0) != Some(std::cmp::Ordering::Less);
+    let above = |k: usize| upper[k] >= 0.0;
+    let from_first = below(0) && above(1);
+    if !(from_first || (below(1) && above(0))) {
+        let v = if upper_level { upper } else { lower };
+        return crossing_fraction(v[0], v[1]);
     }
-    let (from, to) = if below(v0) { (v0, v1) } else { (v1, v0) };
-    let raw = |level: f64| (from - level) / ((from - level) - (to - level));
+    let (from, to) = if from_first { (0, 1) } else { (1, 0) };
+    let raw = |v: [f64; 2]| v[from] / (v[from] - v[to]);
     let m = EDGE_MARGIN;
-    let t_lo = raw(lo);
+    let t_lo = raw(lower);
     let t_lo = if t_lo.is_finite() {
         t_lo.clamp(m, 1.0 - 2.0 * m)
     } else {
         1.0 / 3.0
     };
-    let t = if upper {
-        let t_hi = raw(hi);
+    let t = if upper_level {
+        let t_hi = raw(upper);
         if t_hi.is_finite() {
             t_hi.clamp(t_lo + m, 1.0 - m)
         } else {
@@ -744,7 +752,19 @@ pub(crate) fn band_crossing(v0: f64, v1: f64, band: Band, upper: bool) -> f64 {
     } else {
         t_lo
     };
-    if below(v0) { t } else { 1.0 - t }
+    if from_first { t } else { 1.0 - t }
+}
+
+/// Position of the zero crossing on the edge from sample value `v0` to `v1`, as a fraction,
+/// kept [`EDGE_MARGIN`] from the ends (the middle when the samples do not place it).
+#[inline]
+pub(crate) fn crossing_fraction(v0: f64, v1: f64) -> f64 {
+    let t = v0 / (v0 - v1);
+    if t.is_finite() {
+        t.clamp(EDGE_MARGIN, 1.0 - EDGE_MARGIN)
+    } else {
+        0.5
+    }
 }
 
 /// Not above the band's lower level, NaN included (as the sample bits have it).

@@ -42,7 +42,7 @@
 //! as they are.
 
 mod chunk;
-pub(crate) use chunk::{apart_in_f32, band_crossing, spans_band};
+pub(crate) use chunk::{apart_in_f32, band_crossing, band_fraction, crossing_fraction, spans_band};
 pub mod table;
 
 use rayon::prelude::*;
@@ -78,7 +78,7 @@ pub enum ContourError {
         index + 1,
         f64::from_bits(at_bits[0]),
         f64::from_bits(at_bits[1]),
-        if *needed > 1 { "fewer than two 32-bit values (a shell's two walls can cross one edge)" } else { "no 32-bit value" }
+        crate::mesh::room_wanting(*needed)
     )]
     BeyondF32 {
         axis: usize,

@@ -7,7 +7,7 @@
 
 use super::lattice::{Lattice, Weights};
 use super::local::{LocalBuilder, LocalMesh, Samples, inside};
-use crate::contour::table::{CORNER_SLOT, EDGE_CORNERS, HI_SLOT, tables};
+use crate::contour::table::{HI_SLOT, tables};
 pub use crate::scaffold::HEX_CORNERS;
 
 pub struct CubeLattice {
@@ -104,17 +104,7 @@ impl Lattice for CubeLattice {
                         (0..8u8).fold(0u8, |bits, c| bits | u8::from(bit(corner(c) as usize)) << c)
                     };
                     let on_face = [i == 0, i == last, j == 0, j == last, k == 0, k == last];
-                    let vertex = |builder: &mut LocalBuilder, slot: u8| {
-                        if slot < CORNER_SLOT {
-                            let [a, b] = EDGE_CORNERS[slot as usize];
-                            builder.crossing(corner(a), corner(b))
-                        } else if slot < HI_SLOT {
-                            builder.point(corner(slot - CORNER_SLOT))
-                        } else {
-                            let [a, b] = EDGE_CORNERS[(slot - HI_SLOT) as usize];
-                            builder.level_crossing(corner(a), corner(b), true)
-                        }
-                    };
+                    let vertex = |builder: &mut LocalBuilder, slot: u8| builder.slot(slot, corner);
                     let Some(upper) = samples.upper else {
                         let config = config_of(&|p| inside(lower[p]));
                         for tri in tables.triangles(config) {

@@ -2,19 +2,18 @@
 //!
 //! Invariants: every vertex lies on one lattice edge `(a, b)` (`a < b`, lattice point indices)
 //! strictly between its ends — for a band (a shell, [`Samples::upper`]) one vertex per level
-//! that crosses the edge, the two at least [`EDGE_MARGIN`] of the edge apart —, or — for cap corners, and inside corners of a 2D region — on one
+//! that crosses the edge, the two at least 1/256 of the edge apart —, or — for cap corners, and inside corners of a 2D region — on one
 //! lattice point `a` (`b == POINT`); triangles are counter-clockwise seen from outside the
 //! solid in reference coordinates (2D: filled region triangles, counter-clockwise in ξ); `caps[f]` closes the solid on the element's face `f` and is used only where
 //! that face is on the scaffold's boundary.
 
 use std::collections::HashMap;
 
+use crate::contour::table::{CORNER_SLOT, EDGE_CORNERS, HI_SLOT};
+use crate::contour::{band_fraction, crossing_fraction};
+
 /// `LocalVertex::b` of a vertex that sits on a lattice point (a cap corner).
 pub const POINT: u32 = u32::MAX;
-
-/// Fraction of an edge kept between a crossing and the edge's ends, as in the contourer: no
-/// two vertices share a position even where the field is exactly zero at a sample.
-const EDGE_MARGIN: f64 = 1.0 / 256.0;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LocalVertex {
@@ -93,6 +92,21 @@ impl<'v> LocalBuilder<'v> {
         })
     }
 
+    /// The vertex of a contour table's slot (`crate::contour::table`) in a cell whose table
+    /// corner `c` is lattice point `corner(c)`: an edge's crossing (its upper level's, for a
+    /// band's `HI_SLOT` slots) or a corner.
+    pub fn slot(&mut self, slot: u8, corner: impl Fn(u8) -> u32) -> u32 {
+        if slot < CORNER_SLOT {
+            let [a, b] = EDGE_CORNERS[slot as usize];
+            self.crossing(corner(a), corner(b))
+        } else if slot < HI_SLOT {
+            self.point(corner(slot - CORNER_SLOT))
+        } else {
+            let [a, b] = EDGE_CORNERS[(slot - HI_SLOT) as usize];
+            self.level_crossing(corner(a), corner(b), true)
+        }
+    }
+
     /// The vertex on lattice point `p` (an inside corner of a cap).
     pub fn point(&mut self, p: u32) -> u32 {
         let mesh = &mut self.mesh;
@@ -129,54 +143,15 @@ pub fn inside(v: f64) -> bool {
     v < 0.0
 }
 
-/// Where along the lattice edge `a → b` (0 at `a`) a level crosses it. Alone on its edge, the
-/// level's linear crossing kept [`EDGE_MARGIN`] from the ends. An edge of a band from below it
-/// (`lower ≥ 0`, or NaN) to above it (`upper ≥ 0`) holds both levels' crossings: measured
-/// from the end below, the lower one is kept in `[m, 1 − 2m]` and the upper one in
-/// `[lower + m, 1 − m]` (`m` the margin), so the two never meet however thin the band is —
-/// and both are computed from the same four samples whichever element computes them.
+/// Where along the lattice edge `a → b` (0 at `a`) a level crosses it: the box contourer's
+/// rule ([`crate::contour::band_fraction`]), so a band's two crossings on one edge are
+/// 1/256 apart and both computed from the same four samples whichever element
+/// computes them.
 fn edge_fraction(samples: Samples, a: usize, b: usize, upper: bool) -> f64 {
     let lower = samples.lower;
-    let level = |values: &[f64]| crossing(values[a], values[b]);
-    let Some(high) = samples.upper else {
-        return level(lower);
-    };
-    let below = |p: usize| lower[p].partial_cmp(&0.0) != Some(std::cmp::Ordering::Less);
-    let above = |p: usize| high[p] >= 0.0;
-    let from_a = below(a) && above(b);
-    if !(from_a || (below(b) && above(a))) {
-        return level(if upper { high } else { lower });
-    }
-    let (from, to) = if from_a { (a, b) } else { (b, a) };
-    let raw = |values: &[f64]| values[from] / (values[from] - values[to]);
-    let m = EDGE_MARGIN;
-    let t_lo = raw(lower);
-    let t_lo = if t_lo.is_finite() {
-        t_lo.clamp(m, 1.0 - 2.0 * m)
-    } else {
-        1.0 / 3.0
-    };
-    let t = if upper {
-        let t_hi = raw(high);
-        if t_hi.is_finite() {
-            t_hi.clamp(t_lo + m, 1.0 - m)
-        } else {
-            (2.0f64 / 3.0).max(t_lo + m)
-        }
-    } else {
-        t_lo
-    };
-    if from_a { t } else { 1.0 - t }
-}
-
-/// The linear zero crossing between samples `va` and `vb`, as a fraction from `va`, kept
-/// [`EDGE_MARGIN`] from the ends (the middle when the samples do not place it).
-fn crossing(va: f64, vb: f64) -> f64 {
-    let t = va / (va - vb);
-    if t.is_finite() {
-        t.clamp(EDGE_MARGIN, 1.0 - EDGE_MARGIN)
-    } else {
-        0.5
+    match samples.upper {
+        None => crossing_fraction(lower[a], lower[b]),
+        Some(high) => band_fraction([lower[a], lower[b]], [high[a], high[b]], upper),
     }
 }
 
@@ -198,5 +173,30 @@ pub fn band_state(lower: &[f64], upper: &[f64], p: usize) -> BandState {
         BandState::Above
     } else {
         BandState::Between
+    }
+}
+
+/// The part of a small triangle between a band's levels, as `visit` calls around its sides
+/// `k → k + 1` (`state` its corners' states, counter-clockwise or not): `visit(k, None)` for
+/// corner `k` when it is between, then `visit(k, Some(upper))` for each level side `k`
+/// crosses, in the order met. All on the triangle's perimeter, in order: a convex polygon.
+pub fn band_triangle_walk(state: [BandState; 3], mut visit: impl FnMut(usize, Option<bool>)) {
+    for k in 0..3 {
+        let (from, to) = (state[k], state[(k + 1) % 3]);
+        if from == BandState::Between {
+            visit(k, None);
+        }
+        let lower = (from == BandState::Below) != (to == BandState::Below);
+        let upper = (from == BandState::Above) != (to == BandState::Above);
+        let levels = if from == BandState::Above {
+            [(upper, true), (lower, false)]
+        } else {
+            [(lower, false), (upper, true)]
+        };
+        for (crossed, level) in levels {
+            if crossed {
+                visit(k, Some(level));
+            }
+        }
     }
 }

@@ -14,7 +14,7 @@
 //! corner `i`.
 
 use super::lattice::{Lattice, Weights};
-use super::local::{BandState, LocalBuilder, LocalMesh, Samples, band_state, inside};
+use super::local::{LocalBuilder, LocalMesh, Samples, band_state, band_triangle_walk, inside};
 
 pub struct TetLattice {
     /// Cells per edge.
@@ -277,26 +277,13 @@ impl TetLattice {
             }
             Some(upper) => {
                 let state = tri.map(|p| band_state(samples.lower, upper, p as usize));
-                for k in 0..3 {
+                band_triangle_walk(state, |k, level| {
                     let (p, q) = (tri[k], tri[(k + 1) % 3]);
-                    let (from, to) = (state[k], state[(k + 1) % 3]);
-                    if from == BandState::Between {
-                        polygon.push((p, p, false));
-                    }
-                    // The levels crossed from `p` to `q`, in the order they are met.
-                    let lower = (from == BandState::Below) != (to == BandState::Below);
-                    let high = (from == BandState::Above) != (to == BandState::Above);
-                    let levels = if from == BandState::Above {
-                        [(high, true), (lower, false)]
-                    } else {
-                        [(lower, false), (high, true)]
-                    };
-                    for (crossed, upper) in levels {
-                        if crossed {
-                            polygon.push((p, q, upper));
-                        }
-                    }
-                }
+                    polygon.push(match level {
+                        None => (p, p, false),
+                        Some(upper) => (p, q, upper),
+                    });
+                });
             }
         }
         if polygon.len() < 3 {

@@ -18,7 +18,7 @@
 
 use super::lattice::{Lattice, Weights};
 use super::local::{LocalBuilder, LocalMesh, Samples, inside};
-use crate::contour::table::{CORNER_SLOT, EDGE_CORNERS, HI_SLOT, tables};
+use crate::contour::table::tables;
 
 /// The quad's corners as 0/1 per axis, in Gmsh order.
 const SQUARE_CORNERS: [[u32; 2]; 4] = [[0, 0], [1, 0], [1, 1], [0, 1]];
@@ -179,17 +179,7 @@ impl SquareLattice {
                 let p = config_of(&|p| inside(lower[p]));
                 let q = config_of(&|p| upper[p] >= 0.0);
                 for tri in tables.band_cap(p, q, FACE_Z0) {
-                    let t = [tri[0], tri[2], tri[1]].map(|slot| {
-                        if slot < CORNER_SLOT {
-                            let [a, b] = EDGE_CORNERS[slot as usize];
-                            builder.crossing(corner(a), corner(b))
-                        } else if slot < HI_SLOT {
-                            builder.point(corner(slot - CORNER_SLOT))
-                        } else {
-                            let [a, b] = EDGE_CORNERS[(slot - HI_SLOT) as usize];
-                            builder.level_crossing(corner(a), corner(b), true)
-                        }
-                    });
+                    let t = [tri[0], tri[2], tri[1]].map(|slot| builder.slot(slot, corner));
                     builder.mesh.triangles.push(t);
                 }
             }

@@ -16,7 +16,7 @@
 //! (the map `(u, v) ↦ ξ` has positive determinant), no caps.
 
 use super::lattice::{Lattice, Weights};
-use super::local::{BandState, LocalBuilder, LocalMesh, Samples, band_state, inside};
+use super::local::{LocalBuilder, LocalMesh, Samples, band_state, band_triangle_walk, inside};
 use crate::scaffold::ElementKind;
 
 pub struct TriangleLattice {
@@ -79,24 +79,12 @@ impl TriangleLattice {
             }
             Some(upper) => {
                 let state = q.map(|p| band_state(samples.lower, upper, p as usize));
-                for k in 0..3 {
-                    let (from, to) = (state[k], state[(k + 1) % 3]);
-                    if from == BandState::Between {
-                        push(builder.point(q[k]));
-                    }
-                    let lower = (from == BandState::Below) != (to == BandState::Below);
-                    let high = (from == BandState::Above) != (to == BandState::Above);
-                    let levels = if from == BandState::Above {
-                        [(high, true), (lower, false)]
-                    } else {
-                        [(lower, false), (high, true)]
-                    };
-                    for (crossed, upper) in levels {
-                        if crossed {
-                            push(builder.level_crossing(q[k], q[(k + 1) % 3], upper));
-                        }
-                    }
-                }
+                band_triangle_walk(state, |k, level| {
+                    push(match level {
+                        None => builder.point(q[k]),
+                        Some(upper) => builder.level_crossing(q[k], q[(k + 1) % 3], upper),
+                    })
+                });
             }
         }
         for k in 1..len.saturating_sub(1) {
