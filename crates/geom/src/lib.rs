@@ -11,9 +11,12 @@
 
 pub mod contour;
 pub mod contour2d;
+pub mod density;
+pub mod distance;
 pub mod element;
 pub mod expr;
 pub mod field;
+pub mod graded;
 pub mod mesh;
 pub mod mesh_io;
 pub mod mesh_read;
