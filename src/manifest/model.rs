@@ -178,6 +178,8 @@ pub struct Output {
     /// Model units per period of the cell, per axis.
     pub cell_size: [f64; 3],
     pub solid: Solid,
+    /// What the solid's numbers are: field values, model units, or a volume fraction to solve.
+    pub sizing: Sizing,
     /// Sample points per axis over the domain, at least 2 (resolved from `samples` or `voxel`).
     pub samples: [usize; 3],
     /// Formats to write, sorted and without duplicates.
@@ -306,6 +308,8 @@ pub struct TiledOutput {
     pub transition: Option<TiledTransition>,
     /// The solid; a graded `thickness` or `offset` replaces its own value node by node.
     pub solid: Solid,
+    /// What the solid's numbers are (a graded `wall`, `grow` or `volume_fraction` is here).
+    pub sizing: Sizing,
     pub thickness: Option<NodalValue>,
     pub offset: Option<NodalValue>,
     /// Samples per element edge.
@@ -352,7 +356,46 @@ pub struct TiledTransition {
     pub by: NodalValue,
 }
 
-/// A value given at the scaffold's nodes.
+/// What an output's solid is sized by (docs/manifest.md, "Sizes in model units").
+///
+/// With [`Sizing::Length`] the [`Solid`]'s numbers are model units on the distance field
+/// `h = (f − level) / |∇f|`: `Shell { thickness }` is the wall, `Inside { offset }` the
+/// growth `grow`, and `Outside { offset }` minus it (the solid `h ≥ −grow`). With
+/// [`Sizing::VolumeFraction`] they are placeholders, replaced by what the build solves.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Sizing {
+    /// `offset` and `thickness`: values of the cell's field.
+    Field,
+    /// `wall` or `grow`, in model units; `graded` replaces the solid's value point by point
+    /// (an expression in x, y, z, or node data on a scaffold).
+    Length {
+        level: f64,
+        graded: Option<NodalValue>,
+    },
+    /// `volume_fraction`: the level (`inside`/`outside`, field values) or the wall (shells,
+    /// model units about `level`) that gives this solid fraction, from the cell's table.
+    VolumeFraction { level: f64, target: Target },
+}
+
+impl Sizing {
+    /// The level of the field whose distance the solid is measured on, when it is.
+    pub fn distance_level(&self, solid: &Solid) -> Option<f64> {
+        match self {
+            Sizing::Field => None,
+            Sizing::Length { level, .. } => Some(*level),
+            Sizing::VolumeFraction { level, .. } => solid.band().map(|_| *level),
+        }
+    }
+}
+
+/// A volume fraction, uniform or graded.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Target {
+    Uniform(f64),
+    Graded(NodalValue),
+}
+
+/// A value given at the scaffold's nodes (or, for an expression, anywhere in the model).
 #[derive(Clone, Debug, PartialEq)]
 pub enum NodalValue {
     /// An expression in the model coordinates x, y, z (checked by the expression parser).

@@ -29,7 +29,7 @@ use toml::de::DeValue;
 
 use super::super::expression;
 use super::super::model::{
-    Cell, GroupSpec, MAX_GRID_ELEMENTS, NodalValue, Scaffold, ScaffoldGrid, ScaffoldSource,
+    Cell, GroupSpec, MAX_GRID_ELEMENTS, NodalValue, Scaffold, ScaffoldGrid, ScaffoldSource, Sizing,
     Thicken, TiledOutput, TiledTransition, tiling_group,
 };
 use super::meshes::FileKind;
@@ -40,10 +40,13 @@ const GRID_KEYS: [&str; 4] = ["min", "max", "divisions", "element"];
 const GRID_ELEMENTS: [&str; 4] = ["hex", "tet", "quad", "tri"];
 const TRANSITION_KEYS: [&str; 2] = ["blend", "by"];
 /// The keys a tiled output reads; the other output keys are errors beside `scaffold`.
-const TILED_KEYS: [&str; 12] = [
+const TILED_KEYS: [&str; 15] = [
     "scaffold",
     "cell",
     "solid",
+    "wall",
+    "grow",
+    "volume_fraction",
     "offset",
     "thickness",
     "resolution",
@@ -57,17 +60,17 @@ const TILED_KEYS: [&str; 12] = [
 /// The keys that make a 2D scaffold's region a solid (at most one).
 const THICKEN_KEYS: [&str; 2] = ["extrude", "thickness_normal"];
 /// Every output key plus the tiled output's own, for unknown-key suggestions.
-const ALL_KEYS: [&str; 20] = {
-    let mut all = [""; 20];
+const ALL_KEYS: [&str; OUTPUT_KEYS.len() + 4] = {
+    let mut all = [""; OUTPUT_KEYS.len() + 4];
     let mut i = 0;
     while i < OUTPUT_KEYS.len() {
         all[i] = OUTPUT_KEYS[i];
         i += 1;
     }
-    all[16] = "scaffold";
-    all[17] = "resolution";
-    all[18] = THICKEN_KEYS[0];
-    all[19] = THICKEN_KEYS[1];
+    all[i] = "scaffold";
+    all[i + 1] = "resolution";
+    all[i + 2] = THICKEN_KEYS[0];
+    all[i + 3] = THICKEN_KEYS[1];
     all
 };
 pub(crate) const DEFAULT_RESOLUTION: usize = 12;
@@ -418,7 +421,13 @@ impl Checker<'_, '_, '_> {
         if let (Some((cell, _, cell_span)), Some(element)) = (&cells, grid_element) {
             self.check_element_group(name, cell, cell_span, element, context.cells);
         }
-        let solid = self.tiled_solid(name, &header, &within, &fields, is_grid);
+        let from = super::sizing::GradedFrom::Scaffold { is_grid };
+        let solid = match self.sized_solid(name, &fields, from) {
+            Some(sized) => sized.map(|(solid, sizing)| (solid, sizing, None, None)),
+            None => self
+                .tiled_solid(name, &header, &within, &fields, is_grid)
+                .map(|(solid, thickness, offset)| (solid, Sizing::Field, thickness, offset)),
+        };
         let resolution = match fields.get("resolution") {
             None => Some(DEFAULT_RESOLUTION),
             Some((_, v)) => self.resolution(&path("resolution"), v),
@@ -456,13 +465,14 @@ impl Checker<'_, '_, '_> {
             return None;
         }
         let (cell, transition, _) = cells?;
-        let (solid, thickness, offset) = solid?;
+        let (solid, sizing, thickness, offset) = solid?;
         Some(TiledOutput {
             name: self.name(key),
             scaffold: scaffold?.0,
             cell,
             transition,
             solid,
+            sizing,
             thickness,
             offset,
             resolution: resolution?,
@@ -772,7 +782,12 @@ impl Checker<'_, '_, '_> {
     }
 
     /// A nodal value: `"nodedata:NAME"` (not on a grid) or an expression in x, y, z.
-    fn nodal(&mut self, key: &str, value: &Value<'_>, is_grid: bool) -> Option<NodalValue> {
+    pub(super) fn nodal(
+        &mut self,
+        key: &str,
+        value: &Value<'_>,
+        is_grid: bool,
+    ) -> Option<NodalValue> {
         let text = self.string(key, value)?;
         if let Some(view) = text.strip_prefix(NODE_DATA_PREFIX) {
             let view = view.trim();

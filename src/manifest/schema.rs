@@ -22,7 +22,7 @@ use toml::Spanned;
 use toml::de::{DeString, DeTable, DeValue};
 
 use super::expression;
-use super::model::{Cell, MAX_SAMPLES_PER_AXIS, Manifest, Name, Output, voxel_samples};
+use super::model::{Cell, MAX_SAMPLES_PER_AXIS, Manifest, Name, Output, Sizing, voxel_samples};
 use super::source::Report;
 use crate::diagnostics::Diagnostic;
 
@@ -36,6 +36,8 @@ pub(crate) mod output_files;
 mod scaffolds;
 #[path = "sdf.rs"]
 mod sdf;
+#[path = "sizing.rs"]
+mod sizing;
 #[path = "symmetry.rs"]
 mod symmetry;
 
@@ -64,7 +66,7 @@ const CELL_KEYS: [&str; 18] = [
     "offset",
     "invert",
 ];
-const OUTPUT_KEYS: [&str; 16] = [
+const OUTPUT_KEYS: [&str; 19] = [
     "cell",
     "sdf",
     "bounds",
@@ -72,6 +74,9 @@ const OUTPUT_KEYS: [&str; 16] = [
     "domain",
     "cell_size",
     "solid",
+    "wall",
+    "grow",
+    "volume_fraction",
     "offset",
     "thickness",
     "samples",
@@ -380,7 +385,13 @@ impl Checker<'_, '_, '_> {
                 Self::positive_number,
             ),
         };
-        let solid = self.solid(name, &header, &within, &fields);
+        let (solid, sizing) = match self.sized_solid(name, &fields, sizing::GradedFrom::Block) {
+            Some(sized) => (sized.as_ref().map(|s| s.0), sized.map(|s| s.1)),
+            None => (
+                self.solid(name, &header, &within, &fields),
+                Some(Sizing::Field),
+            ),
+        };
         let samples = self.samples(name, &header, &within, &fields, domain.as_ref(), planar);
         let formats = self.formats(&path("formats"), fields.get("formats"));
         let encoding = match fields.get("ascii") {
@@ -418,6 +429,7 @@ impl Checker<'_, '_, '_> {
             domain_max: domain.max,
             cell_size,
             solid: solid?,
+            sizing: sizing?,
             samples,
             formats: formats?,
             encoding: encoding?,

@@ -903,6 +903,7 @@ fn output(name: &str, span: Option<std::ops::Range<usize>>) -> Output {
         domain_max: [1.0; 3],
         cell_size: [1.0; 3],
         solid: Solid::Inside { offset: 0.0 },
+        sizing: Sizing::Field,
         samples: [32; 3],
         formats: vec![Format::Stl],
         encoding: Encoding::Binary,
