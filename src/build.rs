@@ -584,6 +584,7 @@ impl<'a> Builder<'a> {
         key: &Key,
         cells: &[&[u8]],
         file: Option<&[u8]>,
+        table: Option<&[u8]>,
     ) -> Result<Value, Failure> {
         let cache = self.cache;
         let progress = self.progress.start(name, 0);
@@ -608,7 +609,7 @@ impl<'a> Builder<'a> {
                 }
                 Ok(writer)
             });
-            let output = stage.run(cells, file, &*progress, &mut |chunk| {
+            let output = stage.run(cells, file, table, &*progress, &mut |chunk| {
                 for prewriter in &prewriters {
                     // A stopped prewriter only means its file is written again later.
                     let _ = prewriter.send.send(Arc::clone(&chunk));
@@ -745,6 +746,7 @@ impl<'a> Builder<'a> {
             Stage::Sample(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
             Stage::Fit(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
             Stage::Constrain(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
+            Stage::Density(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
             Stage::Combine(stage) => {
                 let inputs = (0..node.inputs.len())
                     .map(bytes)
@@ -756,13 +758,22 @@ impl<'a> Builder<'a> {
                 let Value::Bytes(cell) = input(0) else {
                     return Err(Failure::Message("input is not a cell".into()));
                 };
-                let part = if node.inputs.len() > 1 {
-                    Some(bytes(1)?)
-                } else {
-                    None
+                // Inputs: the cell, the part (with `within`), the density table (when solved).
+                let part = match stage.within {
+                    Some(_) => Some(bytes(1)?),
+                    None => None,
+                };
+                let table = match stage.reads_table() {
+                    true => Some(bytes(node.inputs.len() - 1)?),
+                    false => None,
                 };
                 let progress = self.progress.start(&node.name, stage.steps());
-                let mesh = stage.run(&cell, part.as_deref().map(|b| b.as_slice()), &*progress)?;
+                let mesh = stage.run(
+                    &cell,
+                    part.as_deref().map(|b| b.as_slice()),
+                    table.as_deref().map(|b| b.as_slice()),
+                    &*progress,
+                )?;
                 Ok(Value::Mesh(Arc::new(mesh)))
             }
             Stage::Sdf(stage) => {
@@ -778,8 +789,11 @@ impl<'a> Builder<'a> {
                     .map(bytes)
                     .collect::<Result<Vec<_>, _>>()?;
                 let slices: Vec<&[u8]> = inputs.iter().map(|b| b.as_slice()).collect();
-                let (cells, file) = slices.split_at(stage.cell_inputs().min(slices.len()));
-                self.run_tile(id, stage, &node.name, key, cells, file.first().copied())
+                // Inputs: the cells, the scaffold file (unless a grid), the density table.
+                let (cells, rest) = slices.split_at(stage.cell_inputs().min(slices.len()));
+                let file = rest.first().copied().filter(|_| stage.reads_file());
+                let table = rest.last().copied().filter(|_| stage.reads_table());
+                self.run_tile(id, stage, &node.name, key, cells, file, table)
             }
             Stage::Write(stage) => {
                 let prewritten = self.take_prewritten(id, self.resolved[&node.inputs[0]].hash);
@@ -856,7 +870,8 @@ fn decode(stage: &Stage, payload: Vec<u8>) -> Result<Value, String> {
         | Stage::Sample(_)
         | Stage::Fit(_)
         | Stage::Combine(_)
-        | Stage::Constrain(_) => Ok(Value::Bytes(Arc::new(payload))),
+        | Stage::Constrain(_)
+        | Stage::Density(_) => Ok(Value::Bytes(Arc::new(payload))),
         Stage::Contour(_) | Stage::Sdf(_) | Stage::Tile(_) => {
             Ok(Value::Mesh(Arc::new(MeshArtifact::decode(&payload)?)))
         }

@@ -54,6 +54,10 @@ pub struct Report {
     /// [`ShellSummary::thinnest_wall`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub thinnest_wall: Option<f64>,
+    /// For a solid sized by `wall`, `grow` or `volume_fraction`: what was asked and, for a
+    /// volume fraction, the level or wall solved and the bisection steps it took.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sizing: Option<crate::stages::artifact::SizingSummary>,
     /// What the build found worth saying about this output: more than one piece, a wall
     /// thinner than [`ShellSummary::THIN_WALL`] sample spacings.
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -86,6 +90,11 @@ impl Report {
             }),
         };
         let planar = result.written.planar_element_area.is_some();
+        let volume_fraction = match result.written.planar_element_area {
+            Some(element_area) => s.area / element_area,
+            None => s.volume / domain_volume,
+        };
+        let sizing = result.written.sizing.clone();
         Report {
             defects: defects(s.watertight, s.manifold, planar),
             estimate: None,
@@ -98,10 +107,7 @@ impl Report {
             volume: s.volume,
             area: s.area,
             // A planar region reports its share of the element's area.
-            volume_fraction: match result.written.planar_element_area {
-                Some(element_area) => s.area / element_area,
-                None => s.volume / domain_volume,
-            },
+            volume_fraction,
             planar,
             sdf_box: result.written.domain.map(|[min, max]| Bbox { min, max }),
             tiling: result.written.tiling.clone(),
@@ -117,7 +123,13 @@ impl Report {
                         .as_ref()
                         .and_then(ShellSummary::warning),
                 )
+                .chain(
+                    sizing
+                        .as_ref()
+                        .and_then(|s| fraction_warning(s, volume_fraction)),
+                )
                 .collect(),
+            sizing,
             bbox: Bbox {
                 min: s.bbox_min,
                 max: s.bbox_max,
@@ -194,6 +206,22 @@ impl Report {
         )
     }
 }
+
+/// A volume fraction asked for and missed by more than [`FRACTION_TOLERANCE`]: the table is
+/// of one period (or element), so a domain that cuts periods, a part, or a skin moves it.
+fn fraction_warning(sizing: &crate::stages::artifact::SizingSummary, achieved: f64) -> Option<String> {
+    let asked = sizing.target.filter(|_| sizing.by == "volume_fraction")?;
+    ((achieved - asked).abs() > FRACTION_TOLERANCE).then(|| {
+        format!(
+            "the volume fraction is {achieved:.4}, not the {asked} asked: it was solved over one \
+             period of the cell (or its element), and this output's domain, part or skin does \
+             not repeat it whole"
+        )
+    })
+}
+
+/// How far a built volume fraction may be from the one asked before the report says so.
+pub const FRACTION_TOLERANCE: f64 = 0.01;
 
 /// The warning for a mesh of more than one piece, with the largest piece's share.
 fn pieces_warning(components: u64, largest: f64, planar: bool) -> Option<String> {

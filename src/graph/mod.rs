@@ -15,6 +15,7 @@ use crate::stages::Stage;
 use crate::stages::crystal::CrystalStage;
 use crate::stages::mesh::{FileStage, MeshCellStage};
 use crate::stages::sdf::SdfStage;
+use crate::stages::sizing::{DensityStage, Over};
 use crate::stages::symmetric::{Combination, CombineStage, ConstrainStage, FitStage, SampleStage};
 use crate::stages::tile::TileStage;
 use crate::stages::write::WriteStage;
@@ -195,11 +196,13 @@ impl Graph {
             if let Some(part) = &output.within {
                 inputs.push(compiler.file(&mut graph, part));
             }
-            let contour = graph.push(
-                format!("contour:{name}"),
-                Stage::contour(output, fitted),
-                inputs,
-            );
+            let stage = Stage::contour(output, fitted);
+            if let Stage::Contour(contour) = &stage
+                && let Some(density) = contour.density()
+            {
+                inputs.push(graph.density(&output.cell, density, cell_node));
+            }
+            let contour = graph.push(format!("contour:{name}"), stage, inputs);
             let write = graph.push(format!("write:{name}"), Stage::write(output), vec![contour]);
             graph.outputs.insert(name.clone(), write);
         }
@@ -224,10 +227,15 @@ impl Graph {
             if let Some(t) = &output.transition {
                 inputs.push(compiler.node(&mut graph, &t.to)?);
             }
+            let cell_node = inputs[0];
             if let ScaffoldSource::Mesh(file) = &manifest.scaffolds[&output.scaffold].source {
                 inputs.push(compiler.file(&mut graph, file));
             }
-            let stage = Stage::Tile(TileStage::new(manifest, output));
+            let tile = TileStage::new(manifest, output);
+            if let Some(density) = tile.density() {
+                inputs.push(graph.density(&output.cell, density, cell_node));
+            }
+            let stage = Stage::Tile(tile);
             let tiled = graph.push(format!("tile:{name}"), stage, inputs);
             let write = WriteStage {
                 formats: output.formats.clone(),
@@ -253,6 +261,24 @@ impl Graph {
             compiler.done.insert(node.name.clone(), id);
         }
         compiler.node(self, name)
+    }
+
+    /// The `density` node of a cell's table, shared by every output asking for the same one
+    /// (its name holds every parameter), so a second volume fraction costs no second table.
+    fn density(&mut self, cell: &str, stage: DensityStage, cell_node: NodeId) -> NodeId {
+        let over = match stage.over {
+            Over::Period { dimension } => format!("period{dimension}"),
+            Over::Element => "element".into(),
+        };
+        let distance = match stage.distance {
+            None => String::new(),
+            Some((level, scale)) => format!(":distance({level},{},{},{})", scale[0], scale[1], scale[2]),
+        };
+        let name = format!("density:{cell}:{over}{distance}");
+        if let Some(id) = self.nodes.iter().position(|n| n.name == name) {
+            return id;
+        }
+        self.push(name, Stage::Density(stage), vec![cell_node])
     }
 
     fn push(&mut self, name: String, stage: Stage, inputs: Vec<NodeId>) -> NodeId {

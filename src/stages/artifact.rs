@@ -10,6 +10,8 @@ use serde::{Deserialize, Serialize};
 use latticebuild_geom::mesh::Mesh;
 use latticebuild_geom::validate::{self, MeshCheck, Pieces};
 
+pub use super::sizing::SizingSummary;
+
 #[cfg(not(target_endian = "little"))]
 compile_error!("mesh payloads store raw little-endian arrays");
 
@@ -94,6 +96,8 @@ pub struct MeshArtifact {
     pub tiling: Option<TilingSummary>,
     /// What the contourer saw of a shell's wall (`None` but for shells it measured).
     pub shell: Option<ShellSummary>,
+    /// A solid sized by `wall`, `grow` or `volume_fraction`: what was asked and solved.
+    pub sizing: Option<SizingSummary>,
 }
 
 /// A shell's wall as its samples saw it, for the report's thin-wall warning.
@@ -212,6 +216,8 @@ struct MeshHead {
     tiling: Option<TilingSummary>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     shell: Option<ShellSummary>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    sizing: Option<SizingSummary>,
 }
 
 impl MeshArtifact {
@@ -224,6 +230,7 @@ impl MeshArtifact {
             domain: self.domain,
             tiling: self.tiling.clone(),
             shell: self.shell.clone(),
+            sizing: self.sizing.clone(),
         };
         let summary = serde_json::to_vec(&head).expect("summary serializes");
         let mut head = Vec::with_capacity(32 + summary.len());
@@ -275,6 +282,7 @@ impl MeshArtifact {
             domain,
             tiling,
             shell,
+            sizing,
         } = serde_json::from_slice(&payload[32..summary_end]).map_err(|e| bad(&e.to_string()))?;
         let vertices = bytemuck::pod_collect_to_vec(&payload[summary_end..vertices_end]);
         let triangles = bytemuck::pod_collect_to_vec(&payload[vertices_end..end]);
@@ -288,6 +296,7 @@ impl MeshArtifact {
             domain,
             tiling,
             shell,
+            sizing,
         })
     }
 }
@@ -320,4 +329,7 @@ pub struct WrittenOutput {
     /// For a shell, its wall (see [`MeshArtifact::shell`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shell: Option<ShellSummary>,
+    /// See [`MeshArtifact::sizing`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sizing: Option<SizingSummary>,
 }

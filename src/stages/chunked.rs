@@ -48,6 +48,9 @@ pub struct ChunkedHead {
     /// For a shell, its wall (see [`super::artifact::MeshArtifact::shell`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shell: Option<super::artifact::ShellSummary>,
+    /// See [`super::artifact::MeshArtifact::sizing`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sizing: Option<super::artifact::SizingSummary>,
 }
 
 /// Where one chunk's record is and what it holds.
@@ -458,6 +461,7 @@ mod tests {
             summary: summary(),
             tiling: None,
             shell: None,
+            sizing: None,
         };
         writer.finish(head).expect("memory").0
     }
@@ -519,6 +523,7 @@ mod tests {
             summary: summary(),
             tiling: None,
             shell: None,
+            sizing: None,
         };
         let (bytes, trailer, check) = writer.finish(head).expect("memory");
         let json = serde_json::to_vec(&trailer).expect("json");

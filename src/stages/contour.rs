@@ -24,13 +24,15 @@ use latticebuild_geom::within::WithinSampler;
 
 use super::artifact::{MeshArtifact, MeshSummary, Planar, ShellSummary};
 use super::mesh::part_sdf;
-use super::symmetric::{FittedPayload, group_of};
+use super::sizing::{DensityStage, Over, cell_field, sized_field, table_of};
+use super::symmetric::group_of;
 use crate::build::StageProgress;
 use crate::cache::{KeyBuilder, Param};
-use crate::manifest::{GroupSpec, Output, Symmetric};
+use crate::manifest::{GroupSpec, Output, Sizing, Symmetric};
 
-/// 3: shells contoured as bands of the field, with their wall in the payload.
-pub const VERSION: u32 = 3;
+/// 3: shells contoured as bands of the field, with their wall in the payload. 4: sized
+/// solids (`wall`, `grow`, `volume_fraction`) and their summary in the payload.
+pub const VERSION: u32 = 4;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct ContourStage {
@@ -44,10 +46,36 @@ pub struct ContourStage {
     pub domain_max: [f64; 3],
     pub cell_size: [f64; 3],
     pub solid: Solid,
+    pub sizing: Sizing,
     pub samples: [usize; 3],
     /// `within`: the part file's name (its bytes are the second input), and the skin.
     pub within: Option<String>,
     pub skin: Option<f64>,
+}
+
+/// The sizing in a key: its kind, level and graded text (uniform values are the solid's).
+pub fn sizing_param(sizing: &Sizing) -> Param {
+    let graded = |g: &Option<crate::manifest::NodalValue>| match g {
+        None => String::new(),
+        Some(crate::manifest::NodalValue::Expr(t)) => format!("expr:{t}"),
+        Some(crate::manifest::NodalValue::NodeData(v)) => format!("nodedata:{v}"),
+    };
+    Param::List(match sizing {
+        Sizing::Field => vec![Param::Str("field".into())],
+        Sizing::Length { level, graded: g } => vec![
+            Param::Str("length".into()),
+            Param::F64(*level),
+            Param::Str(graded(g)),
+        ],
+        Sizing::VolumeFraction { level, target } => vec![
+            Param::Str("volume_fraction".into()),
+            Param::F64(*level),
+            match target {
+                crate::manifest::Target::Uniform(phi) => Param::F64(*phi),
+                crate::manifest::Target::Graded(g) => Param::Str(graded(&Some(g.clone()))),
+            },
+        ],
+    })
 }
 
 fn vec3(v: [f64; 3]) -> Param {
@@ -64,6 +92,7 @@ impl ContourStage {
             domain_max: output.domain_max,
             cell_size: output.cell_size,
             solid: output.solid,
+            sizing: output.sizing.clone(),
             samples: output.samples,
             within: output.within.as_ref().map(|f| f.given.clone()),
             skin: output.skin,
@@ -100,6 +129,47 @@ impl ContourStage {
                     .map_or(String::new(), |e| e.to_string_lossy().to_lowercase()),
             )
             .param("skin", self.skin.unwrap_or(0.0))
+            .param("sizing", sizing_param(&self.sizing))
+    }
+
+    /// Whether the stage reads a density table (its last input): to solve a volume fraction.
+    pub fn reads_table(&self) -> bool {
+        matches!(self.sizing, Sizing::VolumeFraction { .. })
+    }
+
+    /// The density stage whose table it reads.
+    pub fn density(&self) -> Option<DensityStage> {
+        self.reads_table().then(|| DensityStage {
+            fitted: self.fitted.clone(),
+            over: if self.over_element {
+                Over::Element
+            } else {
+                Over::Period {
+                    dimension: if self.planar_domain { 2 } else { 3 },
+                }
+            },
+            distance: self.sizing.distance_level(&self.solid).map(|level| {
+                (level, if self.over_element { [1.0; 3] } else { self.cell_size })
+            }),
+        })
+    }
+
+    /// Model points where a graded volume fraction must lie in (0, 1): a 9-point lattice
+    /// per axis over the domain, corners included.
+    fn probes(&self) -> Vec<[f64; 3]> {
+        const N: usize = 9;
+        let at = |a: usize, i: usize| {
+            self.domain_min[a] + (self.domain_max[a] - self.domain_min[a]) * i as f64 / (N - 1) as f64
+        };
+        let mut points = Vec::with_capacity(N * N * N);
+        for k in 0..N {
+            for j in 0..N {
+                for i in 0..N {
+                    points.push([at(0, i), at(1, j), at(2, k)]);
+                }
+            }
+        }
+        points
     }
 
     /// Number of progress steps [`ContourStage::run`] reports.
@@ -114,15 +184,44 @@ impl ContourStage {
         &self,
         cell_payload: &[u8],
         part: Option<&[u8]>,
+        table: Option<&[u8]>,
         progress: &dyn StageProgress,
     ) -> Result<MeshArtifact, String> {
-        let field: Box<dyn ScalarField> = match &self.fitted {
-            None => super::cell::cell_field(cell_payload)?,
-            Some(spec) => {
-                let group = group_of(spec)?;
-                Box::new(FittedPayload::from_bytes(cell_payload)?.cell(&group)?)
-            }
+        let field = cell_field(cell_payload, self.fitted.as_ref())?;
+        let table = table.map(table_of).transpose()?;
+        let scale = if self.over_element {
+            [1.0; 3]
+        } else {
+            self.cell_size
         };
+        let sized = sized_field(
+            field,
+            self.solid,
+            &self.sizing,
+            scale,
+            table.as_ref(),
+            &self.probes(),
+        )?;
+        // The contourers see the sized field and solid as if they had been given.
+        let stage = ContourStage {
+            solid: sized.solid,
+            ..self.clone()
+        };
+        let artifact = stage.contour_field(&*sized.field, part, progress)?;
+        Ok(MeshArtifact {
+            sizing: sized.summary,
+            ..artifact
+        })
+    }
+
+    /// Contours `field` as `self.solid` (see [`ContourStage::run`]).
+    fn contour_field(
+        &self,
+        field: &dyn ScalarField,
+        part: Option<&[u8]>,
+        progress: &dyn StageProgress,
+    ) -> Result<MeshArtifact, String> {
+        let field = field;
         progress.phase("contouring");
         let mut shell = None;
         let (mesh, planar) = if self.over_element {
@@ -186,6 +285,7 @@ impl ContourStage {
             domain: None,
             tiling: None,
             shell,
+            sizing: None,
         })
     }
 

@@ -13,13 +13,14 @@
 //! | `cell`    | source kind, TPMS name or expression text               | —              | canonical formula text |
 //! | `mesh`    | format, placement, sample                               | file bytes     | placed soup ([`mesh`]), the `cell:` node of a mesh cell |
 //! | `crystal` | format, species, tolerance, max_scale, include_images, optimize | file bytes | PS model ([`crystal`]), the `cell:` node of a crystal cell |
-//! | `contour` | domain, cell size, solid, offset, thickness, samples, within, skin | cell payload (+ part file) | mesh + its check ([`artifact`]) |
+//! | `density` | group, region (period or element), distance level and scale (shells) | cell payload | `V(level)` quantile table ([`sizing`]) |
+//! | `contour` | domain, cell size, solid, offset, thickness, sizing, samples, within, skin | cell payload (+ part file) (+ density table) | mesh + its check ([`artifact`]) |
 //! | `sample`  | group, N, mirror, symmetrize                            | cell payload   | `N^d` samples of the sampling domain |
 //! | `fit`     | group, N (or tolerance, mirror, symmetrize for `auto`)  | samples (or cell payload for `auto`) | coefficient table (JSON) |
 //! | `blend`   | group, weights                                          | member coefficient tables | coefficient table |
 //! | `minkowski` | group, op, N                                          | two coefficient tables | coefficient table |
 //! | `constrain` | group, normal_to_faces, offset, invert                | coefficient table | coefficient table + constraint report |
-//! | `tile`    | scaffold (extension, or grid), group, by, solid, offset, thickness, graded thickness/offset, resolution, skin | cell table(s) (+ scaffold file bytes) | mesh + its check + the tiling's counts and scaffold volume |
+//! | `tile`    | scaffold (extension, or grid), group, by, solid, offset, thickness, graded thickness/offset, sizing, resolution, skin | cell table(s) (+ scaffold file bytes) (+ density table) | mesh + its check + the tiling's counts and scaffold volume |
 //! | `sdf`     | canonical program (paths as input numbers), bounds, samples or voxel | the `file` words' bytes | mesh + its check + the box |
 //! | `write`   | formats, encoding, path stem                            | contour payload| files written and the mesh summary (JSON) |
 
@@ -30,6 +31,7 @@ pub mod contour;
 pub mod crystal;
 pub mod mesh;
 pub mod sdf;
+pub mod sizing;
 pub mod symmetric;
 pub mod tile;
 pub mod write;
@@ -53,6 +55,7 @@ pub enum Stage {
     Fit(symmetric::FitStage),
     Combine(symmetric::CombineStage),
     Constrain(symmetric::ConstrainStage),
+    Density(sizing::DensityStage),
     Contour(contour::ContourStage),
     Sdf(sdf::SdfStage),
     Tile(tile::TileStage),
@@ -83,6 +86,7 @@ impl Stage {
             Stage::Fit(_) => "fit",
             Stage::Combine(s) => s.kind(),
             Stage::Constrain(_) => "constrain",
+            Stage::Density(_) => "density",
             Stage::Contour(_) => "contour",
             Stage::Sdf(_) => "sdf",
             Stage::Tile(_) => "tile",
@@ -99,6 +103,7 @@ impl Stage {
             Stage::Sample(_) | Stage::Fit(_) | Stage::Combine(_) | Stage::Constrain(_) => {
                 symmetric::VERSION
             }
+            Stage::Density(_) => sizing::VERSION,
             Stage::Contour(_) => contour::VERSION,
             Stage::Sdf(_) => sdf::VERSION,
             Stage::Tile(_) => tile::VERSION,
@@ -118,6 +123,7 @@ impl Stage {
             Stage::Fit(s) => s.key_params(builder),
             Stage::Combine(s) => s.key_params(builder),
             Stage::Constrain(s) => s.key_params(builder),
+            Stage::Density(s) => s.key_params(builder),
             Stage::Contour(s) => s.key_params(builder),
             Stage::Sdf(s) => s.key_params(builder),
             Stage::Tile(s) => s.key_params(builder),
@@ -141,11 +147,14 @@ impl Stage {
             Stage::Fit(_) => "formula".into(),
             Stage::Combine(_) => format!("cell {}", i + 1),
             Stage::Constrain(_) => "fit".into(),
+            Stage::Density(_) => "cell".into(),
             Stage::Contour(_) if i == 0 => "cell".into(),
-            Stage::Contour(_) => "part".into(),
+            Stage::Contour(s) if i == 1 && s.within.is_some() => "part".into(),
+            Stage::Contour(_) => "density table".into(),
             Stage::Sdf(s) => format!("file {}", s.files.get(i).map_or("?", |f| f.as_str())),
             Stage::Tile(s) if i < s.cell_inputs() => format!("cell {}", i + 1),
-            Stage::Tile(_) => "scaffold".into(),
+            Stage::Tile(s) if i == s.cell_inputs() && s.reads_file() => "scaffold".into(),
+            Stage::Tile(_) => "density table".into(),
             Stage::Write(_) => "mesh".into(),
         }
     }

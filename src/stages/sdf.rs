@@ -187,6 +187,7 @@ impl SdfStage {
             domain: Some([contoured.domain.min, contoured.domain.max]),
             tiling: None,
             shell: None,
+            sizing: None,
         })
     }
 }

@@ -29,6 +29,8 @@
 //!   curved surface are errors naming the file and its element kind.
 
 use latticebuild_geom::contour::{BandMesh, steepest_at_level_within};
+use latticebuild_geom::density::LevelTable;
+use latticebuild_geom::distance::DistanceField;
 use latticebuild_geom::element::Element3;
 use latticebuild_geom::expr;
 use latticebuild_geom::field::{Band, Grid, ScalarField, Solid};
@@ -43,18 +45,21 @@ use std::sync::Arc;
 
 use super::artifact::{MeshArtifact, MeshSummary, Planar, ShellSummary, TilingSummary};
 use super::chunked::ChunkedHead;
+use super::contour::sizing_param;
+use super::sizing::{DensityStage, Over, SizingSummary, table_of};
 use super::symmetric::{FittedPayload, group_of};
 use crate::build::StageProgress;
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::{
-    GroupSpec, Manifest, NodalValue, ScaffoldGrid, ScaffoldSource, Thicken, TiledOutput,
-    tiling_group,
+    GroupSpec, Manifest, NodalValue, ScaffoldGrid, ScaffoldSource, Sizing, Target, Thicken,
+    TiledOutput, tiling_group,
 };
 
 /// 3: quadratic elements interpolate nodal values through all their nodes; weights clamped
 /// after interpolation. 4: chunks of about 500k triangles (were 2M). 5: shells contoured as
 /// the band between their two levels, and their wall measured (`shell` in the head).
-pub const VERSION: u32 = 5;
+/// 6: sized solids (`wall`, `grow`, `volume_fraction`) and their summary in the head.
+pub const VERSION: u32 = 6;
 
 /// Triangles per chunk asked of the producer, about. Chunk boundaries are in the payload's
 /// bytes, so in its hash: the chunk size is a function of the resolution (in the key) alone,
@@ -94,6 +99,7 @@ pub struct TileStage {
     /// The weight of the second cell, with a transition.
     pub by: Option<NodalValue>,
     pub solid: Solid,
+    pub sizing: Sizing,
     pub thickness: Option<NodalValue>,
     pub offset: Option<NodalValue>,
     pub resolution: usize,
@@ -136,6 +142,7 @@ impl TileStage {
             group,
             by: output.transition.as_ref().map(|t| t.by.clone()),
             solid: output.solid,
+            sizing: output.sizing.clone(),
             thickness: output.thickness.clone(),
             offset: output.offset.clone(),
             resolution: output.resolution,
@@ -172,6 +179,7 @@ impl TileStage {
             .param("thickness", thickness)
             .param("graded_thickness", nodal_param(&self.thickness))
             .param("graded_offset", nodal_param(&self.offset))
+            .param("sizing", sizing_param(&self.sizing))
             .param("resolution", Param::U64(self.resolution as u64))
             .param("skin", self.skin.unwrap_or(0.0))
             .param(
@@ -183,9 +191,31 @@ impl TileStage {
             )
     }
 
-    /// How many inputs are cells (the rest is the scaffold file, if any).
+    /// How many inputs are cells (then the scaffold file, if any, then the density table).
     pub fn cell_inputs(&self) -> usize {
         self.cells.len()
+    }
+
+    /// Whether the scaffold is a file (an input after the cells).
+    pub fn reads_file(&self) -> bool {
+        matches!(self.scaffold, ScaffoldInput::File(_))
+    }
+
+    /// Whether the stage reads a density table (its last input): to solve a volume fraction.
+    pub fn reads_table(&self) -> bool {
+        matches!(self.sizing, Sizing::VolumeFraction { .. })
+    }
+
+    /// The density stage whose table it reads: over the reference element, in its units.
+    pub fn density(&self) -> Option<DensityStage> {
+        self.reads_table().then(|| DensityStage {
+            fitted: Some(self.group.clone()),
+            over: Over::Element,
+            distance: self
+                .sizing
+                .distance_level(&self.solid)
+                .map(|level| (level, [1.0; 3])),
+        })
     }
 
     /// The scaffold from the file's bytes (`None` for a grid), checked for bad elements.
@@ -260,6 +290,7 @@ impl TileStage {
         &self,
         cells: &[&[u8]],
         file: Option<&[u8]>,
+        table: Option<&[u8]>,
         progress: &dyn StageProgress,
         chunks: &mut (dyn FnMut(Arc<MeshChunk>) -> Result<(), String> + Send),
     ) -> Result<TileOutput, String> {
@@ -267,10 +298,13 @@ impl TileStage {
         let scaffold = self.scaffold(file)?;
         self.check_kind(scaffold.kind)?;
         let group = group_of(&self.group)?;
-        let fields = cells
+        let fitted = cells
             .iter()
             .map(|bytes| FittedPayload::from_bytes(bytes)?.cell(&group))
             .collect::<Result<Vec<_>, String>>()?;
+        let table = table.map(table_of).transpose()?;
+        let sized = self.sized(&scaffold, fitted, table.as_ref())?;
+        let fields = &sized.cells;
         let nodal = |what: &str, value: &Option<NodalValue>| -> Result<Option<Vec<f64>>, String> {
             value
                 .as_ref()
@@ -278,21 +312,27 @@ impl TileStage {
                 .transpose()
         };
         let weight = nodal("by", &self.by)?;
-        let thickness = nodal("thickness", &self.thickness)?;
+        let thickness = match sized.thickness {
+            Some(values) => Some(values),
+            None => nodal("thickness", &self.thickness)?,
+        };
         if let Some(values) = &thickness {
             self.positive(&scaffold, "thickness", values)?;
         }
-        let offset = nodal("offset", &self.offset)?;
+        let offset = match sized.offset {
+            Some(values) => Some(values),
+            None => nodal("offset", &self.offset)?,
+        };
         let solid = TiledSolid {
-            cell: &fields[0],
+            cell: &*fields[0],
             transition: match (&weight, fields.get(1)) {
                 (Some(weight), Some(to)) => Some(Transition {
-                    to: to as &dyn ScalarField,
+                    to: &**to as &dyn ScalarField,
                     weight,
                 }),
                 _ => None,
             },
-            solid: self.solid,
+            solid: sized.solid,
             thickness: thickness.as_deref(),
             offset: offset.as_deref(),
         };
@@ -300,7 +340,12 @@ impl TileStage {
         if scaffold.kind.dimension() == 2 {
             return self
                 .tile_surface(&scaffold, &solid, progress)
-                .map(TileOutput::Whole);
+                .map(|artifact| {
+                    TileOutput::Whole(MeshArtifact {
+                        sizing: sized.summary.clone(),
+                        ..artifact
+                    })
+                });
         }
         // The check takes each chunk on the pool while the next one is tiled (see
         // `stream_scaffold`'s sink): its parallel parts share both threads with the tiling,
@@ -332,6 +377,7 @@ impl TileStage {
             ));
         }
         Ok(TileOutput::Chunked(ChunkedHead {
+            sizing: sized.summary,
             shell: self.shell_summary(&solid, reference_element(scaffold.kind)),
             summary: MeshSummary::from_check(&check).with_pieces(&pieces.finish(), false),
             tiling: Some(TilingSummary {
@@ -450,6 +496,7 @@ impl TileStage {
         progress.phase("checking the mesh");
         let summary = MeshSummary::of_mesh(&mesh, planar.is_some());
         Ok(MeshArtifact {
+            sizing: None,
             shell: self.shell_summary(solid, None),
             mesh,
             summary,
@@ -517,6 +564,164 @@ impl TileStage {
         Ok(values)
     }
 
+    /// The cells and solid for the output's sizing, with the nodal thickness or offset it
+    /// implies. Walls and growths in model units become reference units node by node,
+    /// divided by the node's element scale ([`node_scales`]); where every element has one
+    /// scale they stay uniform (one reference contour for all elements). A volume fraction
+    /// of the reference element holds in every element an affine map takes it to, so it is
+    /// solved once, in reference units.
+    fn sized(
+        &self,
+        scaffold: &Scaffold,
+        fitted: Vec<latticebuild_geom::symmetric::FittedCell>,
+        table: Option<&LevelTable>,
+    ) -> Result<TiledSizing, String> {
+        let boxed = |cells: Vec<latticebuild_geom::symmetric::FittedCell>, level: Option<f64>| {
+            cells
+                .into_iter()
+                .map(|cell| -> Box<dyn ScalarField> {
+                    match level {
+                        None => Box::new(cell),
+                        Some(level) => Box::new(DistanceField {
+                            inner: cell,
+                            level,
+                            scale: [1.0; 3],
+                        }),
+                    }
+                })
+                .collect::<Vec<_>>()
+        };
+        let shell = self.solid.band().is_some();
+        let mut sized = TiledSizing {
+            cells: Vec::new(),
+            solid: self.solid,
+            thickness: None,
+            offset: None,
+            summary: None,
+        };
+        match &self.sizing {
+            Sizing::Field => sized.cells = boxed(fitted, None),
+            Sizing::Length { level, graded } => {
+                sized.cells = boxed(fitted, Some(*level));
+                let (scales, uniform) = node_scales(scaffold);
+                let asked = match self.solid {
+                    Solid::Shell { thickness } | Solid::EccentricShell { thickness, .. } => {
+                        thickness
+                    }
+                    Solid::Inside { offset } => offset,
+                    Solid::Outside { offset } => -offset,
+                };
+                sized.summary = Some(SizingSummary {
+                    by: if shell { "wall" } else { "grow" }.into(),
+                    target: graded.is_none().then_some(asked),
+                    solved_level: None,
+                    solved_wall: None,
+                    iterations: None,
+                });
+                let what = if shell { "wall" } else { "grow" };
+                let model = match graded {
+                    Some(value) => self.nodal_values(scaffold, what, value)?,
+                    None => vec![asked; scaffold.nodes.len()],
+                };
+                if shell {
+                    self.positive(scaffold, what, &model)?;
+                }
+                match (uniform, graded) {
+                    (Some(scale), None) => {
+                        sized.solid = match self.solid {
+                            Solid::Inside { offset } => Solid::Inside {
+                                offset: offset / scale,
+                            },
+                            Solid::Outside { offset } => Solid::Outside {
+                                offset: offset / scale,
+                            },
+                            _ => Solid::Shell {
+                                thickness: asked / scale,
+                            },
+                        }
+                    }
+                    _ => {
+                        let reference: Vec<f64> =
+                            model.iter().zip(&scales).map(|(v, s)| v / s).collect();
+                        match self.solid {
+                            Solid::Inside { .. } => sized.offset = Some(reference),
+                            Solid::Outside { .. } => {
+                                sized.offset = Some(reference.iter().map(|v| -v).collect())
+                            }
+                            _ => sized.thickness = Some(reference),
+                        }
+                    }
+                }
+            }
+            Sizing::VolumeFraction { level, target } => {
+                let table = table.ok_or("a volume fraction needs the cell's table")?;
+                sized.cells = boxed(fitted, shell.then_some(*level));
+                // Inside: the fraction below the level; outside: above it; shells: |h| below
+                // the half wall.
+                let fraction = |phi: f64| match self.solid {
+                    Solid::Outside { .. } => 1.0 - phi,
+                    _ => phi,
+                };
+                let mut summary = SizingSummary {
+                    by: "volume_fraction".into(),
+                    target: None,
+                    solved_level: None,
+                    solved_wall: None,
+                    iterations: None,
+                };
+                match target {
+                    Target::Uniform(phi) => {
+                        let solved = table.level_for(fraction(*phi)).map_err(|e| e.to_string())?;
+                        summary.target = Some(*phi);
+                        summary.iterations = Some(solved.iterations);
+                        sized.solid = match self.solid {
+                            Solid::Inside { .. } => Solid::Inside {
+                                offset: solved.level,
+                            },
+                            Solid::Outside { .. } => Solid::Outside {
+                                offset: solved.level,
+                            },
+                            _ => Solid::Shell {
+                                thickness: 2.0 * solved.level,
+                            },
+                        };
+                        if shell {
+                            // In model units: the reference wall times the mean element scale.
+                            let (scales, _) = node_scales(scaffold);
+                            let mean = scales.iter().sum::<f64>() / scales.len().max(1) as f64;
+                            summary.solved_wall = Some(2.0 * solved.level * mean);
+                        } else {
+                            summary.solved_level = Some(solved.level);
+                        }
+                    }
+                    Target::Graded(value) => {
+                        let phis = self.nodal_values(scaffold, "volume_fraction", value)?;
+                        if let Some(i) = phis.iter().position(|&p| !(p > 0.0 && p < 1.0)) {
+                            return Err(format!(
+                                "`outputs.{}.volume_fraction` is {} at node {} of {}, which \
+                                 cannot be reached: the reachable range is 0 < \
+                                 volume_fraction < 1",
+                                self.output,
+                                phis[i],
+                                scaffold.node_tags.get(i).copied().unwrap_or(i as u64),
+                                self.source()
+                            ));
+                        }
+                        let levels = phis.iter().map(|&p| table.level_at(fraction(p)));
+                        match self.solid {
+                            Solid::Inside { .. } | Solid::Outside { .. } => {
+                                sized.offset = Some(levels.collect())
+                            }
+                            _ => sized.thickness = Some(levels.map(|h| 2.0 * h).collect()),
+                        }
+                    }
+                }
+                sized.summary = Some(summary);
+            }
+        }
+        Ok(sized)
+    }
+
     fn positive(&self, scaffold: &Scaffold, what: &str, values: &[f64]) -> Result<(), String> {
         match values.iter().position(|&v| v <= 0.0) {
             None => Ok(()),
@@ -529,4 +734,50 @@ impl TileStage {
             )),
         }
     }
+}
+
+/// The cells and solid a tiling is made of, once sized (see [`TileStage::sized`]).
+struct TiledSizing {
+    cells: Vec<Box<dyn ScalarField>>,
+    solid: Solid,
+    thickness: Option<Vec<f64>>,
+    offset: Option<Vec<f64>>,
+    summary: Option<SizingSummary>,
+}
+
+/// Per node, the linear scale of the elements around it (model units per reference unit):
+/// `(measure / reference measure)^(1/d)` per element, averaged over the elements using the
+/// node; and that scale when every element has it (to 1 part in 10⁹). Exact for elements
+/// that are similar copies of the reference element; for stretched ones, their mean size.
+fn node_scales(scaffold: &Scaffold) -> (Vec<f64>, Option<f64>) {
+    let (reference, dimension) = match reference_element(scaffold.kind) {
+        Some(Element3::Cube) => (1.0, 3),
+        // The regular tetrahedron of edge √2 inscribed in the unit cube.
+        Some(Element3::Tetrahedron) => (1.0 / 3.0, 3),
+        None if scaffold.kind.corner_count() == 3 => (3f64.sqrt() / 4.0, 2),
+        None => (1.0, 2),
+    };
+    let rule = scaffold.measure_rule();
+    let element_scales: Vec<f64> = (0..scaffold.element_count())
+        .map(|e| (scaffold.element_measure(e, &rule).abs() / reference).powf(1.0 / dimension as f64))
+        .collect();
+    let mut sums = vec![0.0; scaffold.nodes.len()];
+    let mut counts = vec![0u32; scaffold.nodes.len()];
+    for (e, scale) in element_scales.iter().enumerate() {
+        for &node in scaffold.element(e) {
+            sums[node as usize] += scale;
+            counts[node as usize] += 1;
+        }
+    }
+    let scales = sums
+        .iter()
+        .zip(&counts)
+        .map(|(s, &c)| if c == 0 { 1.0 } else { s / c as f64 })
+        .collect();
+    let first = element_scales.first().copied().unwrap_or(1.0);
+    let uniform = element_scales
+        .iter()
+        .all(|s| (s - first).abs() <= 1e-9 * first)
+        .then_some(first);
+    (scales, uniform)
 }

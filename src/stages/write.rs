@@ -163,6 +163,7 @@ impl WriteStage {
                     domain: None,
                     tiling: head.tiling.clone(),
                     shell: head.shell.clone(),
+                    sizing: head.sizing.clone(),
                 });
             }
         };
@@ -200,6 +201,7 @@ impl WriteStage {
             domain: artifact.domain,
             tiling: artifact.tiling.clone(),
             shell: artifact.shell.clone(),
+            sizing: artifact.sizing.clone(),
         })
     }
 }

@@ -113,6 +113,15 @@ impl LevelTable {
         })
     }
 
+    /// The level at fraction `phi` read off the table directly (the inverse
+    /// [`LevelTable::level_for`] bisects for), with `phi` clamped into the table.
+    pub fn level_at(&self, phi: f64) -> f64 {
+        let at = if phi.is_nan() { 0.5 } else { phi.clamp(0.0, 1.0) } * QUANTILES as f64;
+        let below = (at.floor() as usize).min(QUANTILES - 1);
+        let t = at - below as f64;
+        self.quantiles[below] + t * (self.quantiles[below + 1] - self.quantiles[below])
+    }
+
     fn range(&self) -> f64 {
         self.quantiles[QUANTILES] - self.quantiles[0]
     }
@@ -251,6 +260,7 @@ mod tests {
             assert!((solved.level - phi).abs() < 1e-4, "{phi}: {solved:?}");
             assert!((table.fraction_below(solved.level) - phi).abs() < 1e-9);
             assert!(solved.iterations > 10);
+            assert!((table.level_at(phi) - solved.level).abs() < 1e-9);
         }
     }
 
