@@ -209,7 +209,10 @@ impl Report {
 
 /// A volume fraction asked for and missed by more than [`FRACTION_TOLERANCE`]: the table is
 /// of one period (or element), so a domain that cuts periods, a part, or a skin moves it.
-fn fraction_warning(sizing: &crate::stages::artifact::SizingSummary, achieved: f64) -> Option<String> {
+fn fraction_warning(
+    sizing: &crate::stages::artifact::SizingSummary,
+    achieved: f64,
+) -> Option<String> {
     let asked = sizing.target.filter(|_| sizing.by == "volume_fraction")?;
     ((achieved - asked).abs() > FRACTION_TOLERANCE).then(|| {
         format!(

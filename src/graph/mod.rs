@@ -272,7 +272,9 @@ impl Graph {
         };
         let distance = match stage.distance {
             None => String::new(),
-            Some((level, scale)) => format!(":distance({level},{},{},{})", scale[0], scale[1], scale[2]),
+            Some((level, scale)) => {
+                format!(":distance({level},{},{},{})", scale[0], scale[1], scale[2])
+            }
         };
         let name = format!("density:{cell}:{over}{distance}");
         if let Some(id) = self.nodes.iter().position(|n| n.name == name) {

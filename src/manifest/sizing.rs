@@ -92,7 +92,9 @@ impl Checker<'_, '_, '_> {
             self.error(
                 v.span(),
                 &format!("both `{key}` and `{replaced}` given in output `{output}`"),
-                &format!("`{key}` sizes the solid in the user's terms, `{replaced}` in field values"),
+                &format!(
+                    "`{key}` sizes the solid in the user's terms, `{replaced}` in field values"
+                ),
                 Some(&format!("remove `{replaced}`")),
             );
             ok = false;
@@ -113,7 +115,9 @@ impl Checker<'_, '_, '_> {
             ("eccentric_shell", None) => {
                 self.error(
                     value.span(),
-                    &format!("`solid = \"eccentric_shell\"` in output `{output}` needs an `offset`"),
+                    &format!(
+                        "`solid = \"eccentric_shell\"` in output `{output}` needs an `offset`"
+                    ),
                     "the field level the sheet is centred on",
                     Some("add `offset = 0.3`, or use `solid = \"shell\"` for the surface itself"),
                 );

@@ -149,7 +149,14 @@ impl ContourStage {
                 }
             },
             distance: self.sizing.distance_level(&self.solid).map(|level| {
-                (level, if self.over_element { [1.0; 3] } else { self.cell_size })
+                (
+                    level,
+                    if self.over_element {
+                        [1.0; 3]
+                    } else {
+                        self.cell_size
+                    },
+                )
             }),
         })
     }
@@ -159,7 +166,8 @@ impl ContourStage {
     fn probes(&self) -> Vec<[f64; 3]> {
         const N: usize = 9;
         let at = |a: usize, i: usize| {
-            self.domain_min[a] + (self.domain_max[a] - self.domain_min[a]) * i as f64 / (N - 1) as f64
+            self.domain_min[a]
+                + (self.domain_max[a] - self.domain_min[a]) * i as f64 / (N - 1) as f64
         };
         let mut points = Vec::with_capacity(N * N * N);
         for k in 0..N {

@@ -277,11 +277,21 @@ pub fn sized_field(
                     let (field, solid) = match solid {
                         Solid::Inside { .. } => {
                             summary.solved_level = Some(solved.level);
-                            (field, Solid::Inside { offset: solved.level })
+                            (
+                                field,
+                                Solid::Inside {
+                                    offset: solved.level,
+                                },
+                            )
                         }
                         Solid::Outside { .. } => {
                             summary.solved_level = Some(solved.level);
-                            (field, Solid::Outside { offset: solved.level })
+                            (
+                                field,
+                                Solid::Outside {
+                                    offset: solved.level,
+                                },
+                            )
                         }
                         _ => {
                             let wall = 2.0 * solved.level;
@@ -348,7 +358,10 @@ fn expression(value: &NodalValue) -> Result<Arc<dyn ScalarField>, String> {
     }
 }
 
-fn mapped(field: Arc<dyn ScalarField>, map: impl Fn(f64) -> f64 + Send + Sync + 'static) -> Spatial {
+fn mapped(
+    field: Arc<dyn ScalarField>,
+    map: impl Fn(f64) -> f64 + Send + Sync + 'static,
+) -> Spatial {
     Spatial::Field {
         field,
         map: Some(Arc::new(map)),

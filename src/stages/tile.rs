@@ -759,7 +759,9 @@ fn node_scales(scaffold: &Scaffold) -> (Vec<f64>, Option<f64>) {
     };
     let rule = scaffold.measure_rule();
     let element_scales: Vec<f64> = (0..scaffold.element_count())
-        .map(|e| (scaffold.element_measure(e, &rule).abs() / reference).powf(1.0 / dimension as f64))
+        .map(|e| {
+            (scaffold.element_measure(e, &rule).abs() / reference).powf(1.0 / dimension as f64)
+        })
         .collect();
     let mut sums = vec![0.0; scaffold.nodes.len()];
     let mut counts = vec![0u32; scaffold.nodes.len()];

@@ -41,9 +41,7 @@ pub struct Solved {
 pub enum TableError {
     #[error("the field is not a number at any sample")]
     NoSamples,
-    #[error(
-        "a volume fraction of {0} cannot be reached: fractions strictly between 0 and 1 can"
-    )]
+    #[error("a volume fraction of {0} cannot be reached: fractions strictly between 0 and 1 can")]
     Unreachable(f64),
 }
 
@@ -116,7 +114,11 @@ impl LevelTable {
     /// The level at fraction `phi` read off the table directly (the inverse
     /// [`LevelTable::level_for`] bisects for), with `phi` clamped into the table.
     pub fn level_at(&self, phi: f64) -> f64 {
-        let at = if phi.is_nan() { 0.5 } else { phi.clamp(0.0, 1.0) } * QUANTILES as f64;
+        let at = if phi.is_nan() {
+            0.5
+        } else {
+            phi.clamp(0.0, 1.0)
+        } * QUANTILES as f64;
         let below = (at.floor() as usize).min(QUANTILES - 1);
         let t = at - below as f64;
         self.quantiles[below] + t * (self.quantiles[below + 1] - self.quantiles[below])
@@ -128,7 +130,10 @@ impl LevelTable {
 
     /// The table as bytes: the entries, `f64` little-endian.
     pub fn to_bytes(&self) -> Vec<u8> {
-        self.quantiles.iter().flat_map(|v| v.to_le_bytes()).collect()
+        self.quantiles
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect()
     }
 
     /// The table from [`LevelTable::to_bytes`]; `None` for bytes of another length.
@@ -181,7 +186,11 @@ pub fn sample(field: &dyn ScalarField, region: Region, n: usize) -> Vec<f64> {
                 .into_par_iter()
                 .flat_map_iter(|k| {
                     let mut plane = vec![0.0; n * n];
-                    let z = if dimension == 3 { (k as f64 + 0.5) * step } else { 0.0 };
+                    let z = if dimension == 3 {
+                        (k as f64 + 0.5) * step
+                    } else {
+                        0.0
+                    };
                     for (j, row) in plane.chunks_mut(n).enumerate() {
                         let points: Vec<[f64; 3]> = (0..n)
                             .map(|i| {
@@ -292,7 +301,14 @@ mod tests {
     #[test]
     fn regions_hold_their_share_of_points_and_their_own_values() {
         let n = 40;
-        let period = sample(&Sum, Region::Period { frame: Frame::Cartesian, dimension: 3 }, n);
+        let period = sample(
+            &Sum,
+            Region::Period {
+                frame: Frame::Cartesian,
+                dimension: 3,
+            },
+            n,
+        );
         assert_eq!(period.len(), n * n * n);
         // Mean of x + y + z over [0, 1)³ is 1.5.
         let mean = period.iter().sum::<f64>() / period.len() as f64;
@@ -304,7 +320,14 @@ mod tests {
         let triangle = sample(&Sum, Region::Element(ReferenceElement::Triangle), n);
         // The triangle fills half its bounding box.
         assert!((triangle.len() as f64 / (n * n) as f64 - 0.5).abs() < 0.03);
-        let rhombus = sample(&Sum, Region::Period { frame: Frame::Hexagonal, dimension: 2 }, n);
+        let rhombus = sample(
+            &Sum,
+            Region::Period {
+                frame: Frame::Hexagonal,
+                dimension: 2,
+            },
+            n,
+        );
         assert_eq!(rhombus.len(), n * n);
     }
 

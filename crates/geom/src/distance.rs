@@ -41,8 +41,9 @@ pub struct DistanceField<F> {
 #[inline]
 fn distance(f: f64, level: f64, gradient: [f64; 3]) -> f64 {
     let v = f - level;
-    let h = v / (gradient[0] * gradient[0] + gradient[1] * gradient[1] + gradient[2] * gradient[2])
-        .sqrt();
+    let h = v
+        / (gradient[0] * gradient[0] + gradient[1] * gradient[1] + gradient[2] * gradient[2])
+            .sqrt();
     if h.is_finite() {
         h
     } else if v > 0.0 {
@@ -136,7 +137,8 @@ impl PlaneSampler for DistanceSampler<'_> {
         let planes: Vec<Vec<f64>> = (0..1 + 2 * pz)
             .map(|d| {
                 let mut plane = vec![0.0; wide * tall];
-                self.inner.sample_rows(k + d, padded_rows.clone(), &mut plane);
+                self.inner
+                    .sample_rows(k + d, padded_rows.clone(), &mut plane);
                 plane
             })
             .collect();
