@@ -25,6 +25,9 @@ use std::sync::mpsc;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
+/// A tile stage's inputs: its cells' payloads, the scaffold file's bytes, the density table.
+type TileInputs<'a> = (&'a [&'a [u8]], Option<&'a [u8]>, Option<&'a [u8]>);
+
 use rayon::prelude::*;
 
 use latticebuild_geom::mesh::MeshChunk;
@@ -582,9 +585,7 @@ impl<'a> Builder<'a> {
         stage: &crate::stages::tile::TileStage,
         name: &str,
         key: &Key,
-        cells: &[&[u8]],
-        file: Option<&[u8]>,
-        table: Option<&[u8]>,
+        (cells, file, table): TileInputs,
     ) -> Result<Value, Failure> {
         let cache = self.cache;
         let progress = self.progress.start(name, 0);
@@ -793,7 +794,7 @@ impl<'a> Builder<'a> {
                 let (cells, rest) = slices.split_at(stage.cell_inputs().min(slices.len()));
                 let file = rest.first().copied().filter(|_| stage.reads_file());
                 let table = rest.last().copied().filter(|_| stage.reads_table());
-                self.run_tile(id, stage, &node.name, key, cells, file, table)
+                self.run_tile(id, stage, &node.name, key, (cells, file, table))
             }
             Stage::Write(stage) => {
                 let prewritten = self.take_prewritten(id, self.resolved[&node.inputs[0]].hash);

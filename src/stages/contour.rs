@@ -229,7 +229,6 @@ impl ContourStage {
         part: Option<&[u8]>,
         progress: &dyn StageProgress,
     ) -> Result<MeshArtifact, String> {
-        let field = field;
         progress.phase("contouring");
         let mut shell = None;
         let (mesh, planar) = if self.over_element {
@@ -237,9 +236,9 @@ impl ContourStage {
                 Some(spec) => group_of(spec)?,
                 None => return Err("`over = \"element\"` needs a cell with a symmetry".into()),
             };
-            self.contour_element(&*field, &group, progress, &mut shell)?
+            self.contour_element(field, &group, progress, &mut shell)?
         } else if self.planar_domain {
-            self.contour_planar_domain(&*field, &mut shell)?
+            self.contour_planar_domain(field, &mut shell)?
         } else {
             let model = Grid::spanning(self.domain_min, self.domain_max, self.samples);
             let cell_grid = model.scaled_down(self.cell_size);
@@ -282,7 +281,7 @@ impl ContourStage {
             (mesh, None)
         };
         if mesh.is_empty() {
-            return Err(self.why_empty(&*field, part.is_some()));
+            return Err(self.why_empty(field, part.is_some()));
         }
         progress.phase("checking the mesh");
         let summary = MeshSummary::of_mesh(&mesh, planar.is_some());

@@ -161,6 +161,9 @@ pub enum Region {
     Element(ReferenceElement),
 }
 
+/// Which points of a box belong to a region.
+type Keep<'a> = &'a (dyn Fn([f64; 3]) -> bool + Sync);
+
 /// The field at the midpoints of `n` intervals per axis over `region` (NaN kept; the table
 /// drops it).
 pub fn sample(field: &dyn ScalarField, region: Region, n: usize) -> Vec<f64> {
@@ -170,12 +173,8 @@ pub fn sample(field: &dyn ScalarField, region: Region, n: usize) -> Vec<f64> {
         let spacing = (hi - lo) / n as f64;
         (lo + 0.5 * spacing, spacing)
     };
-    let (box_lo, box_hi, dimension, keep): (
-        [f64; 3],
-        [f64; 3],
-        usize,
-        Option<&(dyn Fn([f64; 3]) -> bool + Sync)>,
-    ) = match region {
+    let (box_lo, box_hi, dimension, keep): ([f64; 3], [f64; 3], usize, Option<Keep>) = match region
+    {
         Region::Period {
             frame: Frame::Hexagonal,
             dimension,
