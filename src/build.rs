@@ -25,9 +25,6 @@ use std::sync::mpsc;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-/// A tile stage's inputs: its cells' payloads, the scaffold file's bytes, the density table.
-type TileInputs<'a> = (&'a [&'a [u8]], Option<&'a [u8]>, Option<&'a [u8]>);
-
 use rayon::prelude::*;
 
 use latticebuild_geom::mesh::MeshChunk;
@@ -39,6 +36,9 @@ use crate::stages::chunked::{ChunkedMesh, ChunkedWriter, is_chunked};
 use crate::stages::tile::TileOutput;
 use crate::stages::write::{MeshInput, WriteError};
 use crate::stages::{MeshArtifact, OutputSink, PendingFile, Prewritten, Stage, WrittenOutput};
+
+/// A tile stage's inputs: its cells' payloads, the scaffold file's bytes, the density table.
+type TileInputs<'a> = (&'a [&'a [u8]], Option<&'a [u8]>, Option<&'a [u8]>);
 
 /// Shows the progress of long stages; see [`crate::progress`].
 pub trait Progress: Sync {
