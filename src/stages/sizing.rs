@@ -14,8 +14,9 @@
 //!   `|h|` for shells (half walls in the units of `scale`): [`DensityStage`] is a pure
 //!   function of the cell payload and its parameters, so outputs sharing a cell, a region and
 //!   (for shells) a level and scale share one table.
-//! - A graded volume fraction outside (0, 1) anywhere it is probed is an error giving the
-//!   point, the value and the reachable range; between probes it is clamped into the range.
+//! - A graded volume fraction outside (0, 1), or a graded wall ≤ 0, anywhere it is probed is
+//!   an error giving the point and the value (and the reachable range); between probes a
+//!   fraction is clamped into the range and a wall to a billionth of a unit.
 
 use std::sync::Arc;
 
@@ -233,6 +234,15 @@ pub fn sized_field(
                 });
             };
             let values = expression(amount)?;
+            if shell {
+                check_range(
+                    values.as_ref(),
+                    probes,
+                    |w| w > 0.0,
+                    "wall",
+                    "greater than 0",
+                )?;
+            }
             let (field, solid) = match solid {
                 Solid::Inside { .. } => (
                     graded(h, mapped(values, |v| v), Spatial::Constant(1.0)),
@@ -307,7 +317,13 @@ pub fn sized_field(
                 }
                 Target::Graded(amount) => {
                     let values = expression(amount)?;
-                    check_fractions(values.as_ref(), probes)?;
+                    check_range(
+                        values.as_ref(),
+                        probes,
+                        |phi| phi > 0.0 && phi < 1.0,
+                        "volume fraction",
+                        "between 0 and 1 (the reachable range is 0 < volume_fraction < 1)",
+                    )?;
                     let lookup = move |phi: f64| table.level_at(fraction_of(phi));
                     let summary = SizingSummary {
                         by: "volume_fraction".into(),
@@ -368,16 +384,22 @@ fn mapped(
     }
 }
 
-/// An error at the first probe where the graded fraction is outside (0, 1).
-fn check_fractions(values: &dyn ScalarField, probes: &[[f64; 3]]) -> Result<(), String> {
+/// An error at the first probe where a graded value is not `allowed`.
+fn check_range(
+    values: &dyn ScalarField,
+    probes: &[[f64; 3]],
+    allowed: impl Fn(f64) -> bool,
+    what: &str,
+    range: &str,
+) -> Result<(), String> {
     let [xs, ys, zs] = std::array::from_fn(|a| probes.iter().map(|p| p[a]).collect::<Vec<_>>());
     let mut out = vec![0.0; probes.len()];
     values.eval_points(&xs, &ys, &zs, &mut out);
-    match out.iter().position(|&phi| !(phi > 0.0 && phi < 1.0)) {
+    match out.iter().position(|&v| !allowed(v)) {
         None => Ok(()),
         Some(i) => Err(format!(
-            "the graded volume fraction is {} at ({}, {}, {}), which cannot be reached: the \
-             reachable range is 0 < volume_fraction < 1",
+            "the graded {what} is {} at ({}, {}, {}), but it must be {range} everywhere in the \
+             domain",
             out[i], probes[i][0], probes[i][1], probes[i][2]
         )),
     }
