@@ -276,7 +276,8 @@ impl Graph {
                 format!(":distance({level},{},{},{})", scale[0], scale[1], scale[2])
             }
         };
-        let name = format!("density:{cell}:{over}{distance}");
+        let projected = if stage.projected { ":projected" } else { "" };
+        let name = format!("density:{cell}:{over}{distance}{projected}");
         if let Some(id) = self.nodes.iter().position(|n| n.name == name) {
             return id;
         }

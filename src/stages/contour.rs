@@ -141,6 +141,7 @@ impl ContourStage {
     pub fn density(&self) -> Option<DensityStage> {
         self.reads_table().then(|| DensityStage {
             fitted: self.fitted.clone(),
+            projected: false,
             over: if self.over_element {
                 Over::Element
             } else {

@@ -57,6 +57,23 @@ pub struct DensityStage {
     /// For shells: the level and the model units per cell unit of the distance field whose
     /// `|h|` is tabled; `None`: the field itself.
     pub distance: Option<(f64, [f64; 3])>,
+    /// Sample the distance point by point, projected onto the surface, as the tiler does
+    /// (`latticebuild_geom::distance`), on a coarser grid; `false`: the grid's first-order
+    /// distance, as the box contourers sample it.
+    pub projected: bool,
+}
+
+/// Midpoints per axis of a table of projected distances (each point costs up to 49
+/// evaluations of the cell).
+const TABLE_SAMPLES_PROJECTED: usize = 64;
+
+/// A field sampled point by point (its `eval_points`), whatever sampler it has.
+struct Pointwise<F>(F);
+
+impl<F: ScalarField> ScalarField for Pointwise<F> {
+    fn eval_points(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
+        self.0.eval_points(xs, ys, zs, out);
+    }
 }
 
 impl DensityStage {
@@ -80,6 +97,7 @@ impl DensityStage {
         key.param("fitted", group.as_str())
             .param("over", over.as_str())
             .param("distance", Param::List(distance))
+            .param("projected", self.projected)
     }
 
     /// The table of the cell whose payload is `cell_payload`, as bytes.
@@ -123,7 +141,10 @@ impl DensityStage {
                     level,
                     scale,
                 };
-                let mut values = density::sample(&distance, region, n);
+                let mut values = match self.projected {
+                    true => density::sample(&Pointwise(distance), region, TABLE_SAMPLES_PROJECTED),
+                    false => density::sample(&distance, region, n),
+                };
                 for v in &mut values {
                     *v = v.abs();
                 }

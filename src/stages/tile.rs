@@ -211,6 +211,7 @@ impl TileStage {
         self.reads_table().then(|| DensityStage {
             fitted: Some(self.group.clone()),
             over: Over::Element,
+            projected: true,
             distance: self
                 .sizing
                 .distance_level(&self.solid)
