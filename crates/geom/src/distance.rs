@@ -122,7 +122,10 @@ impl<F: ScalarField> ScalarField for DistanceField<F> {
             for i in 0..n {
                 let (f, g) = (value[i], gradient[i]);
                 let g2 = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
-                if !(g2 > 0.0) || !f.is_finite() || landed(f, g, path[i]) {
+                if g2.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+                    || !f.is_finite()
+                    || landed(f, g, path[i])
+                {
                     continue;
                 }
                 // The Newton step in model units, taken in cell units; `path` is how far the
