@@ -424,9 +424,11 @@ formats = ["ply"]
     let reports = project.build(&[]);
     let tiled = number(by_name(&reports, "tiled"), "volume");
     let block = number(by_name(&reports, "block"), "volume");
-    // The block's box is the scaffold's, shifted by half a period: the same 4³ periods.
+    // The block's box is the scaffold's, shifted by half a period: the same 4³ periods. The
+    // block's distance is first order (from its grid), the tiler's projected onto the surface
+    // (point by point): the two sheets differ by 1.6 % at a wall a tenth of the cell.
     assert!(
-        (tiled - block).abs() < 0.01 * block,
+        (tiled - block).abs() < 0.02 * block,
         "tiled {tiled} vs block {block}"
     );
     for (name, phi, tolerance) in [("hex_fraction", 0.2, 0.003), ("tet_fraction", 0.25, 0.01)] {
