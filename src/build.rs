@@ -33,6 +33,7 @@ use latticebuild_geom::mesh_io::{Format, StlStream, Workers};
 use crate::cache::{Cache, CacheError, ContentHash, EntryReader, Key, Lookup, Opened, explain};
 use crate::graph::{Graph, NodeId};
 use crate::stages::chunked::{ChunkedMesh, ChunkedWriter, is_chunked};
+use crate::stages::islands::IslandsFailure;
 use crate::stages::tile::TileOutput;
 use crate::stages::write::{MeshInput, WriteError};
 use crate::stages::{MeshArtifact, OutputSink, PendingFile, Prewritten, Stage, WrittenOutput};
@@ -781,6 +782,24 @@ impl<'a> Builder<'a> {
                 let (cells, file) = slices.split_at(stage.cell_inputs().min(slices.len()));
                 self.run_tile(id, stage, &node.name, key, cells, file.first().copied())
             }
+            Stage::Islands(stage) => {
+                let result = match input(0) {
+                    Value::Mesh(mesh) => stage.run(MeshInput::Whole(&mesh)),
+                    Value::Chunked(mesh) => stage.run(MeshInput::Chunked {
+                        chunks: &*mesh,
+                        head: &mesh.trailer.head,
+                    }),
+                    _ => return Err(Failure::Message("input is not a mesh".into())),
+                };
+                match result {
+                    Ok(mesh) => Ok(Value::Mesh(Arc::new(mesh))),
+                    Err(IslandsFailure::Failed(message)) => Err(Failure::Message(message)),
+                    Err(IslandsFailure::CorruptInput(reason)) => Err(Failure::CorruptInput {
+                        input: node.inputs[0],
+                        reason,
+                    }),
+                }
+            }
             Stage::Write(stage) => {
                 let prewritten = self.take_prewritten(id, self.resolved[&node.inputs[0]].hash);
                 let input = match input(0) {
@@ -857,7 +876,7 @@ fn decode(stage: &Stage, payload: Vec<u8>) -> Result<Value, String> {
         | Stage::Fit(_)
         | Stage::Combine(_)
         | Stage::Constrain(_) => Ok(Value::Bytes(Arc::new(payload))),
-        Stage::Contour(_) | Stage::Sdf(_) | Stage::Tile(_) => {
+        Stage::Contour(_) | Stage::Sdf(_) | Stage::Tile(_) | Stage::Islands(_) => {
             Ok(Value::Mesh(Arc::new(MeshArtifact::decode(&payload)?)))
         }
         Stage::Write(_) => serde_json::from_slice(&payload)

@@ -40,7 +40,7 @@ const GRID_KEYS: [&str; 4] = ["min", "max", "divisions", "element"];
 const GRID_ELEMENTS: [&str; 4] = ["hex", "tet", "quad", "tri"];
 const TRANSITION_KEYS: [&str; 2] = ["blend", "by"];
 /// The keys a tiled output reads; the other output keys are errors beside `scaffold`.
-const TILED_KEYS: [&str; 12] = [
+const TILED_KEYS: [&str; 14] = [
     "scaffold",
     "cell",
     "solid",
@@ -53,21 +53,23 @@ const TILED_KEYS: [&str; 12] = [
     "formats",
     "ascii",
     "path",
+    "keep",
+    "min_island_volume",
 ];
 /// The keys that make a 2D scaffold's region a solid (at most one).
 const THICKEN_KEYS: [&str; 2] = ["extrude", "thickness_normal"];
 /// Every output key plus the tiled output's own, for unknown-key suggestions.
-const ALL_KEYS: [&str; 20] = {
-    let mut all = [""; 20];
+const ALL_KEYS: [&str; 22] = {
+    let mut all = [""; 22];
     let mut i = 0;
     while i < OUTPUT_KEYS.len() {
         all[i] = OUTPUT_KEYS[i];
         i += 1;
     }
-    all[16] = "scaffold";
-    all[17] = "resolution";
-    all[18] = THICKEN_KEYS[0];
-    all[19] = THICKEN_KEYS[1];
+    all[18] = "scaffold";
+    all[19] = "resolution";
+    all[20] = THICKEN_KEYS[0];
+    all[21] = THICKEN_KEYS[1];
     all
 };
 pub(crate) const DEFAULT_RESOLUTION: usize = 12;
@@ -452,6 +454,10 @@ impl Checker<'_, '_, '_> {
             None => Some(name.to_string()),
             Some((_, v)) => self.stem(&path("path"), v),
         };
+        // A 2D grid's region stays a surface unless thickened: its pieces have no volume.
+        let region = grid_element.is_some_and(|e| e.dimension() == 2)
+            && !THICKEN_KEYS.iter().any(|k| fields.contains_key(k));
+        let islands = self.islands(name, &fields, region);
         if self.report.len() > before {
             return None;
         }
@@ -471,6 +477,7 @@ impl Checker<'_, '_, '_> {
             formats: formats?,
             encoding: encoding?,
             stem: stem?,
+            islands: islands?,
         })
     }
 

@@ -430,6 +430,7 @@ mod tests {
             duplicate_positions: 0,
             components: 1,
             largest_component_fraction: 1.0,
+            removed: None,
         }
     }
 

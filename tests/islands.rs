@@ -1,0 +1,257 @@
+//! Removing loose pieces (`keep = "largest"`, `min_island_volume`) through the real binary.
+//! The expected numbers are measured here, independently of the tool's own piece code: the
+//! unfiltered output is written as ASCII PLY, split into connected surfaces by a union-find of
+//! this file, and each surface's signed volume summed; the filtered output must be exactly
+//! the pieces that pass.
+
+mod common;
+
+use common::{Project, ran};
+
+/// Schwarz P's `f ≥ offset` in each hexahedron of a 3 × 2 × 2 grid is a ball about the
+/// element's centre (P is 3 there and at most 1 on the faces); a graded offset makes the 12
+/// balls of 12 sizes. A hollow ball with a small ball in its cavity, as a plain output.
+const MANIFEST: &str = r#"
+[cells.p_oh]
+tpms = "p"
+symmetry = "Oh"
+
+[cells.hollow]
+expr = "min(abs(sqrt(x*x + y*y + z*z) - 0.3) - 0.05, sqrt(x*x + y*y + z*z) - 0.12)"
+
+[scaffolds.cubes]
+grid = { min = [0, 0, 0], max = [3, 2, 2], divisions = [3, 2, 2], element = "hex" }
+
+[outputs.balls]
+scaffold = "cubes"
+cell = "p_oh"
+solid = "outside"
+offset = "2.4 - 0.2 * x - 0.05 * y - 0.02 * z"
+resolution = 12
+formats = ["ply"]
+ascii = true
+
+[outputs.hollow]
+cell = "hollow"
+domain = { min = [-0.5, -0.5, -0.5], max = [0.5, 0.5, 0.5] }
+samples = 41
+formats = ["ply"]
+ascii = true
+"#;
+
+/// The vertices and triangles of an ASCII PLY file of ours.
+fn read_ply(path: &std::path::Path) -> (Vec<[f64; 3]>, Vec<[usize; 3]>) {
+    let text = std::fs::read_to_string(path).expect("ply");
+    let (header, body) = text.split_once("end_header\n").expect("header");
+    let count = |element: &str| -> usize {
+        header
+            .lines()
+            .find_map(|l| l.strip_prefix(&format!("element {element} ")))
+            .and_then(|n| n.trim().parse().ok())
+            .expect("count")
+    };
+    let (nv, nf) = (count("vertex"), count("face"));
+    let mut lines = body.lines();
+    let vertices = (0..nv)
+        .map(|_| {
+            // Written as the shortest text of each `f32`: read back as the same `f32`.
+            let v: Vec<f64> = lines
+                .next()
+                .expect("vertex")
+                .split_whitespace()
+                .map(|x| f64::from(x.parse::<f32>().expect("number")))
+                .collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect();
+    let faces = (0..nf)
+        .map(|_| {
+            let f: Vec<usize> = lines
+                .next()
+                .expect("face")
+                .split_whitespace()
+                .map(|x| x.parse().expect("index"))
+                .collect();
+            assert_eq!(f[0], 3);
+            [f[1], f[2], f[3]]
+        })
+        .collect();
+    (vertices, faces)
+}
+
+/// The signed volume of each connected surface (through shared vertices), in first-triangle
+/// order.
+fn surface_volumes(path: &std::path::Path) -> Vec<f64> {
+    let (vertices, faces) = read_ply(path);
+    let mut parent: Vec<usize> = (0..vertices.len()).collect();
+    fn root(parent: &mut [usize], mut x: usize) -> usize {
+        while parent[x] != x {
+            x = parent[x];
+        }
+        x
+    }
+    for f in &faces {
+        for k in 1..3 {
+            let (a, b) = (root(&mut parent, f[0]), root(&mut parent, f[k]));
+            parent[a.max(b)] = a.min(b);
+        }
+    }
+    let mut order = Vec::new();
+    let mut volume = std::collections::HashMap::new();
+    for f in &faces {
+        let r = root(&mut parent, f[0]);
+        let [a, b, c] = f.map(|v| vertices[v]);
+        let v = (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+            + a[2] * (b[0] * c[1] - b[1] * c[0]))
+            / 6.0;
+        *volume.entry(r).or_insert_with(|| {
+            order.push(r);
+            0.0
+        }) += v;
+    }
+    order.iter().map(|r| volume[r]).collect()
+}
+
+fn number(report: &serde_json::Value, key: &str) -> f64 {
+    report[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{key} in {report}"))
+}
+
+fn one(reports: &serde_json::Value) -> &serde_json::Value {
+    &reports.as_array().expect("reports")[0]
+}
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9 * a.abs().max(b.abs())
+}
+
+#[test]
+fn keeping_the_largest_of_tiled_balls_keeps_exactly_it() {
+    let project = Project::new(MANIFEST);
+    let all = one(&project.build(&["balls"])).clone();
+    assert_eq!(all["components"], 12);
+    let mut balls = surface_volumes(&project.out("balls.ply"));
+    assert_eq!(balls.len(), 12);
+    assert!(balls.iter().all(|&v| v > 0.0));
+    balls.sort_by(f64::total_cmp);
+    // Twelve sizes: the grading made the largest unique.
+    assert!(balls.windows(2).all(|w| w[1] > w[0] * 1.001), "{balls:?}");
+    let total: f64 = balls.iter().sum();
+    assert!(close(number(&all, "volume"), total));
+    assert!(all.get("removed").is_none());
+
+    let keep = project.build(&["balls", "--set", "outputs.balls.keep=largest"]);
+    let kept = one(&keep);
+    assert_eq!(kept["components"], 1);
+    assert_eq!(kept["watertight"], true);
+    assert_eq!(kept["manifold"], true);
+    assert!(kept["warnings"].is_null(), "{kept}");
+    let largest = balls[11];
+    assert!(close(number(kept, "volume"), largest), "{kept}");
+    assert_eq!(surface_volumes(&project.out("balls.ply")).len(), 1);
+    assert!(close(
+        surface_volumes(&project.out("balls.ply"))[0],
+        largest
+    ));
+    let removed = &kept["removed"];
+    assert_eq!(removed["pieces"], 11);
+    assert!((number(removed, "volume") - (total - largest)).abs() < 1e-9 * total);
+    assert!(close(number(removed, "largest_piece"), balls[10]));
+    assert_eq!(ran(&keep), ["islands:balls", "write:balls"]);
+
+    // A threshold between the fifth and sixth smallest drops exactly the five smallest.
+    let v = 0.5 * (balls[4] + balls[5]);
+    let set = format!("outputs.balls.min_island_volume={v}");
+    let reports = project.build(&["balls", "--set", "outputs.balls.keep=all", "--set", &set]);
+    let kept = one(&reports);
+    assert_eq!(kept["components"], 7);
+    assert_eq!(kept["removed"]["pieces"], 5);
+    let expected: f64 = balls[5..].iter().sum();
+    assert!((number(kept, "volume") - expected).abs() < 1e-9 * total);
+    let mut written = surface_volumes(&project.out("balls.ply"));
+    written.sort_by(f64::total_cmp);
+    assert_eq!(written.len(), 7);
+    for (w, b) in written.iter().zip(&balls[5..]) {
+        assert!(close(*w, *b), "{written:?} vs {balls:?}");
+    }
+    // Only the filter and the write ran: the tiling is the cached one.
+    assert_eq!(ran(&reports), ["islands:balls", "write:balls"]);
+    // And with neither key the tiling's own entry is written again.
+    assert_eq!(ran(&project.build(&["balls"])), ["write:balls"]);
+}
+
+#[test]
+fn a_hollow_ball_keeps_its_cavity_and_loses_the_island_in_it() {
+    let project = Project::new(MANIFEST);
+    project.build(&["hollow"]);
+    // Outer wall, cavity (negative) and the small ball inside the cavity.
+    let surfaces = surface_volumes(&project.out("hollow.ply"));
+    assert_eq!(surfaces.len(), 3, "{surfaces:?}");
+    let outer = surfaces.iter().copied().fold(f64::MIN, f64::max);
+    let cavity = surfaces.iter().copied().fold(f64::MAX, f64::min);
+    let island = surfaces
+        .iter()
+        .copied()
+        .find(|&v| v != outer && v != cavity);
+    let island = island.expect("island");
+    assert!(cavity < 0.0 && island > 0.0 && island < outer + cavity);
+
+    let reports = project.build(&["hollow", "--set", "outputs.hollow.keep=largest"]);
+    let kept = one(&reports);
+    assert_eq!(kept["components"], 1);
+    assert_eq!(kept["watertight"], true);
+    assert!(close(number(kept, "volume"), outer + cavity), "{kept}");
+    let written = surface_volumes(&project.out("hollow.ply"));
+    assert_eq!(written.len(), 2, "the cavity stays");
+    assert_eq!(kept["removed"]["pieces"], 1);
+    assert!(close(number(&kept["removed"], "volume"), island));
+    // About the spheres' volumes: 4/3 π (0.35³ − 0.25³).
+    let shell = 4.0 / 3.0 * std::f64::consts::PI * (0.35f64.powi(3) - 0.25f64.powi(3));
+    assert!((number(kept, "volume") / shell - 1.0).abs() < 0.03);
+
+    // A threshold under the island's volume removes nothing; over the shell's, everything,
+    // which is an error, not an empty file.
+    let under = format!("outputs.hollow.min_island_volume={}", island * 0.5);
+    let kept = project.build(&["hollow", "--set", &under]);
+    assert_eq!(one(&kept)["removed"]["pieces"], 0);
+    assert_eq!(one(&kept)["components"], 2);
+    std::fs::remove_file(project.out("hollow.ply")).expect("rm");
+    let over = format!("outputs.hollow.min_island_volume={}", outer * 2.0);
+    let out = project.run(&["build", "lattice.toml", "hollow", "--set", &over]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("would remove every piece"), "{stderr}");
+    assert!(stderr.contains("min_island_volume"), "{stderr}");
+    assert!(!project.out("hollow.ply").exists());
+}
+
+#[test]
+fn bad_values_are_errors_at_their_place() {
+    for (value, says) in [
+        (
+            "keep = \"biggest\"",
+            "unknown value `biggest` for `outputs.hollow.keep`",
+        ),
+        ("keep = 1", "outputs.hollow.keep"),
+        (
+            "min_island_volume = 0",
+            "`outputs.hollow.min_island_volume` must be greater than 0",
+        ),
+        ("min_island_volume = -2.5", "must be greater than 0"),
+        ("min_island_volume = nan", "must be a finite number"),
+        ("min_island_volume = inf", "must be a finite number"),
+    ] {
+        let manifest = MANIFEST.replace("samples = 41\n", &format!("samples = 41\n{value}\n"));
+        let line = manifest.lines().position(|l| l == value).expect("line") + 1;
+        let project = Project::new(&manifest);
+        let out = project.run(&["build", "lattice.toml", "hollow"]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{value}: {stderr}");
+        assert!(stderr.contains(says), "{value}: {stderr}");
+        assert!(
+            stderr.contains(&format!("lattice.toml:{line}:")),
+            "{value}: {stderr}"
+        );
+    }
+}
