@@ -32,7 +32,9 @@
 //! vertex is counted once, by exactly one of the triangles around it. Solid surfaces are
 //! disjoint from the query point's surface, so a crossing's x is never the query's.
 //!
-//! Memory: besides input and output, a label per vertex and a few numbers per surface.
+//! Memory: besides input and output, a label per vertex and a few numbers per surface. A mesh
+//! streamed as chunks is filtered without holding it by [`IslandLabeller`], [`IslandPlan`]
+//! and [`IslandKeeper`] (`stream.rs`): two or three passes over the chunks, the same result.
 
 use crate::mesh::Mesh;
 
@@ -177,9 +179,48 @@ pub fn remove_islands(
     } else {
         assign_owners(mesh, &mut surfaces, &surface_of);
     }
-    // The pieces' measures, by owning solid.
+    let (kept_surface, mut removal) = decide(&surfaces, filter, by_area)?;
+    // The kept triangles in order; their vertices renumbered in id order.
+    let mut new_id = vec![UNSEEN; n];
+    let mut triangles = Vec::new();
+    for t in &mesh.triangles {
+        if valid(t) && kept_surface[surface_of(t[0]) as usize] {
+            triangles.push(*t);
+            for &v in t {
+                new_id[v as usize] = 0;
+            }
+        } else {
+            removal.triangles_removed += 1;
+        }
+    }
+    let mut vertices = Vec::new();
+    for (v, id) in new_id.iter_mut().enumerate() {
+        if *id != UNSEEN {
+            *id = vertices.len() as u32;
+            vertices.push(mesh.vertices[v]);
+        }
+    }
+    for t in &mut triangles {
+        *t = t.map(|v| new_id[v as usize]);
+    }
+    Ok(Filtered {
+        mesh: Mesh {
+            vertices,
+            triangles,
+        },
+        removal,
+    })
+}
+
+/// Which surfaces are kept (by surface), and what is removed but the triangle count: the
+/// pieces are the solids with the surfaces they own (set before), measured together.
+fn decide(
+    surfaces: &[Surface],
+    filter: &IslandFilter,
+    by_area: bool,
+) -> Result<(Vec<bool>, Removal), IslandError> {
     let mut measure = vec![0.0f64; surfaces.len()];
-    for s in &surfaces {
+    for s in surfaces {
         if let Some(o) = s.owner {
             measure[o as usize] += if by_area { s.area } else { s.volume };
         }
@@ -227,109 +268,112 @@ pub fn remove_islands(
             removal.removed += if by_area { s.area } else { s.volume };
         }
     }
-    // The kept triangles in order; their vertices renumbered in id order.
-    let mut new_id = vec![UNSEEN; n];
-    let mut triangles = Vec::new();
-    for t in &mesh.triangles {
-        if valid(t) && kept_surface[surface_of(t[0]) as usize] {
-            triangles.push(*t);
-            for &v in t {
-                new_id[v as usize] = 0;
-            }
-        } else {
-            removal.triangles_removed += 1;
-        }
-    }
-    let mut vertices = Vec::new();
-    for (v, id) in new_id.iter_mut().enumerate() {
-        if *id != UNSEEN {
-            *id = vertices.len() as u32;
-            vertices.push(mesh.vertices[v]);
-        }
-    }
-    for t in &mut triangles {
-        *t = t.map(|v| new_id[v as usize]);
-    }
-    Ok(Filtered {
-        mesh: Mesh {
-            vertices,
-            triangles,
-        },
-        removal,
-    })
+    Ok((kept_surface, removal))
 }
 
 /// Sets every surface's owner: a solid owns itself; a non-solid surface is owned by the
 /// innermost solid enclosing its point (see the module docs), or by none.
 fn assign_owners(mesh: &Mesh, surfaces: &mut [Surface], surface_of: &dyn Fn(u32) -> u32) {
-    // Queries: (non-solid surface, candidate solid), with the parity of the ray's crossings.
-    let solids: Vec<u32> = (0..surfaces.len() as u32)
-        .filter(|&k| surfaces[k as usize].volume > 0.0)
-        .collect();
-    for &k in &solids {
-        surfaces[k as usize].owner = Some(k);
-    }
-    let contains = |outer: &Surface, inner: &Surface| {
-        (0..3).all(|a| outer.min[a] <= inner.min[a] && inner.max[a] <= outer.max[a])
-    };
-    // Per candidate solid, its queries sorted by the point's y: (y, query index).
-    let mut queries: Vec<(u32, u32)> = Vec::new();
-    let mut by_candidate: Vec<Vec<(f64, u32)>> = vec![Vec::new(); surfaces.len()];
-    for k in 0..surfaces.len() as u32 {
-        if surfaces[k as usize].volume > 0.0 {
-            continue;
-        }
-        for &s in &solids {
-            if contains(&surfaces[s as usize], &surfaces[k as usize]) {
-                by_candidate[s as usize]
-                    .push((surfaces[k as usize].point[1], queries.len() as u32));
-                queries.push((k, s));
-            }
-        }
-    }
+    let mut queries = Queries::new(surfaces);
     if queries.is_empty() {
         return;
     }
-    for list in &mut by_candidate {
-        list.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    }
-    let mut odd = vec![false; queries.len()];
     let n = mesh.vertices.len();
     for t in &mesh.triangles {
-        if !t.iter().all(|&v| (v as usize) < n) {
-            continue;
+        if t.iter().all(|&v| (v as usize) < n) {
+            let corners = t.map(|v| mesh.vertices[v as usize].map(f64::from));
+            queries.cross(surfaces, surface_of(t[0]), corners);
         }
-        let list = &by_candidate[surface_of(t[0]) as usize];
-        if list.is_empty() {
-            continue;
+    }
+    queries.resolve(surfaces);
+}
+
+/// The enclosure tests still open: for each non-solid surface, the solids whose box holds
+/// its box, with the parity of the crossings of its point's ray with each so far.
+struct Queries {
+    /// (non-solid surface, candidate solid).
+    pairs: Vec<(u32, u32)>,
+    /// Per candidate solid, its queries sorted by the point's y: (y, pair index).
+    by_candidate: Vec<Vec<(f64, u32)>>,
+    odd: Vec<bool>,
+}
+
+impl Queries {
+    /// The queries of `surfaces`, whose solids are made their own owners.
+    fn new(surfaces: &mut [Surface]) -> Queries {
+        let solids: Vec<u32> = (0..surfaces.len() as u32)
+            .filter(|&k| surfaces[k as usize].volume > 0.0)
+            .collect();
+        for &k in &solids {
+            surfaces[k as usize].owner = Some(k);
         }
-        let [a, b, c] = t.map(|v| mesh.vertices[v as usize].map(f64::from));
+        let contains = |outer: &Surface, inner: &Surface| {
+            (0..3).all(|a| outer.min[a] <= inner.min[a] && inner.max[a] <= outer.max[a])
+        };
+        let mut pairs: Vec<(u32, u32)> = Vec::new();
+        let mut by_candidate: Vec<Vec<(f64, u32)>> = vec![Vec::new(); surfaces.len()];
+        for k in 0..surfaces.len() as u32 {
+            if surfaces[k as usize].volume > 0.0 {
+                continue;
+            }
+            for &s in &solids {
+                if contains(&surfaces[s as usize], &surfaces[k as usize]) {
+                    let y = surfaces[k as usize].point[1];
+                    by_candidate[s as usize].push((y, pairs.len() as u32));
+                    pairs.push((k, s));
+                }
+            }
+        }
+        for list in &mut by_candidate {
+            list.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        }
+        let odd = vec![false; pairs.len()];
+        Queries {
+            pairs,
+            by_candidate,
+            odd,
+        }
+    }
+
+    fn is_empty(&self) -> bool {
+        self.pairs.is_empty()
+    }
+
+    /// Counts a triangle of surface `s` against the rays of the queries `s` is a candidate of.
+    fn cross(&mut self, surfaces: &[Surface], s: u32, [a, b, c]: [[f64; 3]; 3]) {
+        let Some(list) = self.by_candidate.get(s as usize) else {
+            return;
+        };
         let (lo, hi) = (a[1].min(b[1]).min(c[1]), a[1].max(b[1]).max(c[1]));
         let start = list.partition_point(|&(y, _)| y < lo);
         for &(y, q) in &list[start..] {
             if y > hi {
                 break;
             }
-            let p = surfaces[queries[q as usize].0 as usize].point;
+            let p = surfaces[self.pairs[q as usize].0 as usize].point;
             if ray_crosses(p, a, b, c) {
-                odd[q as usize] ^= true;
+                self.odd[q as usize] ^= true;
             }
         }
     }
-    // The innermost enclosing solid: least volume, then first in mesh order.
-    for (q, &(k, s)) in queries.iter().enumerate() {
-        if !odd[q] {
-            continue;
-        }
-        let better = match surfaces[k as usize].owner {
-            None => true,
-            Some(o) => {
-                let (vs, vo) = (surfaces[s as usize].volume, surfaces[o as usize].volume);
-                vs < vo || (vs == vo && s < o)
+
+    /// Sets each non-solid surface's owner: the innermost enclosing solid (least volume,
+    /// then first in mesh order), or none.
+    fn resolve(self, surfaces: &mut [Surface]) {
+        for (q, &(k, s)) in self.pairs.iter().enumerate() {
+            if !self.odd[q] {
+                continue;
             }
-        };
-        if better {
-            surfaces[k as usize].owner = Some(s);
+            let better = match surfaces[k as usize].owner {
+                None => true,
+                Some(o) => {
+                    let (vs, vo) = (surfaces[s as usize].volume, surfaces[o as usize].volume);
+                    vs < vo || (vs == vo && s < o)
+                }
+            };
+            if better {
+                surfaces[k as usize].owner = Some(s);
+            }
         }
     }
 }
@@ -394,6 +438,9 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 fn norm(a: [f64; 3]) -> f64 {
     dot(a, a).sqrt()
 }
+
+mod stream;
+pub use stream::{IslandKeeper, IslandLabeller, IslandPlan};
 
 #[cfg(test)]
 mod tests;

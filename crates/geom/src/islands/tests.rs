@@ -1,4 +1,5 @@
 use super::*;
+use crate::mesh::MeshChunk;
 use crate::validate::{check, pieces};
 
 /// An axis-aligned box's 12 triangles, outward (inward with `inward`), ids from `base`.
@@ -251,4 +252,88 @@ fn a_planar_regions_pieces_are_measured_by_area() {
         remove_islands(&mesh, &at_least(1.0), true),
         Err(IslandError::VolumeOfRegion)
     );
+}
+
+/// The streamed passes over any chunking: the same kept mesh, bit for bit, as the whole.
+fn streamed(mesh: &Mesh, filter: &IslandFilter, per_chunk: usize) -> Result<Filtered, IslandError> {
+    let chunks = MeshChunk::split(mesh, per_chunk);
+    let mut labeller = IslandLabeller::new(false);
+    for chunk in &chunks {
+        labeller.push(chunk);
+    }
+    let mut plan = labeller.finish();
+    if plan.needs_ray_pass() {
+        for chunk in &chunks {
+            plan.ray_pass(chunk);
+        }
+    }
+    let mut keeper = plan.decide(filter)?;
+    let mut out = Mesh::default();
+    let mut next = 0;
+    let mut kept = Vec::new();
+    for chunk in &chunks {
+        let part = keeper.push(chunk);
+        assert_eq!(part.first_vertex, next);
+        next = part.end_vertex();
+        out.vertices.extend(&part.vertices);
+        out.triangles.extend(&part.triangles);
+        kept.push(part);
+    }
+    // The kept chunks keep the chunk invariants: what `MeshChunk::split` makes of the result.
+    for (k, part) in kept.iter().enumerate() {
+        for t in &part.triangles {
+            for &v in t {
+                assert!(v < part.end_vertex());
+                assert_eq!(part.position(v), Some(out.vertices[v as usize]));
+            }
+        }
+        let later: std::collections::BTreeSet<u32> = kept[k + 1..]
+            .iter()
+            .flat_map(|c| c.triangles.iter().flatten().copied())
+            .filter(|&v| v < part.end_vertex())
+            .collect();
+        assert!(later.iter().all(|v| part.open.binary_search(v).is_ok()));
+        assert!(part.borrowed.windows(2).all(|w| w[0].0 < w[1].0));
+    }
+    Ok(Filtered {
+        mesh: out,
+        removal: keeper.removal(),
+    })
+}
+
+#[test]
+fn streamed_chunks_keep_what_the_whole_mesh_keeps() {
+    // Nested hollow boxes, a stray, loose cubes; chunked finely enough to split pieces, and
+    // with the pieces' triangles interleaved so that fragments join late.
+    let mut mesh = boxes(&[
+        ([3.0; 3], 4.0, false),
+        ([0.0; 3], 10.0, false),
+        ([4.0; 3], 2.0, true),
+        ([1.0; 3], 8.0, true),
+        ([20.0; 3], 1.0, false),
+        ([30.0; 3], 2.0, false),
+        ([40.0; 3], 1.5, true),
+    ]);
+    let n = mesh.triangles.len();
+    let interleaved: Vec<[u32; 3]> = (0..n).map(|k| mesh.triangles[(k * 37) % n]).collect();
+    for triangles in [mesh.triangles.clone(), interleaved] {
+        mesh.triangles = triangles;
+        for filter in [LARGEST, at_least(1.0), at_least(50.0), at_least(7.0)] {
+            let whole = remove_islands(&mesh, &filter, false).expect("whole");
+            for per in [1, 5, 12, 30, 1000] {
+                let chunked = streamed(&mesh, &filter, per).expect("streamed");
+                assert_eq!(chunked.mesh, whole.mesh, "{filter:?}, {per} per chunk");
+                let (a, b) = (chunked.removal, whole.removal);
+                assert_eq!(
+                    (a.pieces, a.pieces_removed, a.triangles_removed),
+                    (b.pieces, b.pieces_removed, b.triangles_removed)
+                );
+                assert!(near(a.removed, b.removed) && near(a.largest_removed, b.largest_removed));
+            }
+        }
+        assert!(matches!(
+            streamed(&mesh, &at_least(1e4), 7),
+            Err(IslandError::NothingKept { pieces: 4, .. })
+        ));
+    }
 }
