@@ -255,3 +255,41 @@ fn bad_values_are_errors_at_their_place() {
         );
     }
 }
+
+/// SDF outputs take the keys too: two balls, the smaller removed.
+#[test]
+fn an_sdf_outputs_smaller_ball_is_removed() {
+    let project = Project::new(
+        "[outputs.two]\nsdf = \"ball ball scale 1/2 move 3,0,0 union\"\nsamples = \"80^3\"\n\
+         formats = [\"ply\"]\nascii = true\nkeep = \"largest\"\n",
+    );
+    let reports = project.build(&[]);
+    let kept = one(&reports);
+    assert_eq!(kept["components"], 1);
+    assert_eq!(kept["removed"]["pieces"], 1);
+    let ball = 4.0 / 3.0 * std::f64::consts::PI;
+    assert!((number(kept, "volume") / ball - 1.0).abs() < 0.03, "{kept}");
+    assert!((number(&kept["removed"], "volume") / (ball / 8.0) - 1.0).abs() < 0.05);
+    let written = surface_volumes(&project.out("two.ply"));
+    assert_eq!(written.len(), 1);
+    assert!(close(written[0], number(kept, "volume")));
+    assert_eq!(ran(&reports), ["islands:two", "sdf:two", "write:two"]);
+}
+
+/// A planar region's pieces have no volume: the keys are errors where they are written.
+#[test]
+fn a_planar_region_refuses_the_keys() {
+    let project = Project::new(
+        "[cells.sq]\nexpr = \"cos(tau*x) + cos(tau*y)\"\nsymmetry = \"D4\"\n\n\
+         [outputs.panel]\ncell = \"sq\"\ndomain = { min = [0, 0], max = [2, 2] }\n\
+         samples = 41\nkeep = \"largest\"\n",
+    );
+    let out = project.run(&["build", "lattice.toml"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("`outputs.panel.keep` does not apply to a planar region"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("lattice.toml:9:1"), "{stderr}");
+}

@@ -69,8 +69,9 @@ impl Checker<'_, '_, '_> {
                         &format!("`{}` does not apply to a planar region", path(k)),
                         "a region's pieces have an area, not a volume",
                         Some(
-                            "remove it, or make the region a solid (`extrude = h` or \
-                             `thickness_normal = h` on a 2D scaffold)",
+                            "remove it, or make the region a solid: `[x, y, z]` domain \
+                             corners fill a box with the 2D cell as a prism; `extrude = h` or \
+                             `thickness_normal = h` thicken a 2D scaffold's region",
                         ),
                     );
                 }
