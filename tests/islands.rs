@@ -293,3 +293,15 @@ fn a_planar_region_refuses_the_keys() {
     );
     assert!(stderr.contains("lattice.toml:9:1"), "{stderr}");
 }
+
+/// The kept mesh's bytes do not depend on the thread count (streamed tiling and filter).
+#[test]
+fn the_kept_bytes_are_the_same_for_any_thread_count() {
+    let mut files = Vec::new();
+    for jobs in ["1", "2", "3"] {
+        let project = Project::new(MANIFEST);
+        project.build(&["balls", "-j", jobs, "--set", "outputs.balls.keep=largest"]);
+        files.push(std::fs::read(project.out("balls.ply")).expect("ply"));
+    }
+    assert!(files.windows(2).all(|w| w[0] == w[1]));
+}
