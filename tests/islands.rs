@@ -31,6 +31,16 @@ resolution = 12
 formats = ["ply"]
 ascii = true
 
+[outputs.hollow_balls]
+scaffold = "cubes"
+cell = "p_oh"
+solid = "eccentric_shell"
+offset = "2.4 - 0.2 * x - 0.05 * y - 0.02 * z"
+thickness = 0.3
+resolution = 12
+formats = ["ply"]
+ascii = true
+
 [outputs.hollow]
 cell = "hollow"
 domain = { min = [-0.5, -0.5, -0.5], max = [0.5, 0.5, 0.5] }
@@ -304,4 +314,41 @@ fn the_kept_bytes_are_the_same_for_any_thread_count() {
         files.push(std::fs::read(project.out("balls.ply")).expect("ply"));
     }
     assert!(files.windows(2).all(|w| w[0] == w[1]));
+}
+
+/// Tiled hollow balls (an eccentric shell about P's level 2 in each element): the streamed
+/// filter must find each cavity's ball (the ray pass) and keep the largest hollow.
+#[test]
+fn tiled_hollow_balls_keep_their_cavities() {
+    let project = Project::new(MANIFEST);
+    project.build(&["hollow_balls"]);
+    let surfaces = surface_volumes(&project.out("hollow_balls.ply"));
+    assert_eq!(surfaces.len(), 24, "{surfaces:?}");
+    // Each hollow ball (outer and inner surface) lies inside its own unit element: its net
+    // volume is the signed volume of the triangles in that element.
+    let (vertices, faces) = read_ply(&project.out("hollow_balls.ply"));
+    let mut net = std::collections::BTreeMap::<[i64; 3], f64>::new();
+    for f in &faces {
+        let [a, b, c] = f.map(|v| vertices[v]);
+        let centre = [0, 1, 2].map(|k| ((a[k] + b[k] + c[k]) / 3.0).floor() as i64);
+        let v = (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+            + a[2] * (b[0] * c[1] - b[1] * c[0]))
+            / 6.0;
+        *net.entry(centre).or_default() += v;
+    }
+    assert_eq!(net.len(), 12);
+    let mut balls: Vec<f64> = net.values().copied().collect();
+    balls.sort_by(f64::total_cmp);
+    let reports = project.build(&["hollow_balls", "--set", "outputs.hollow_balls.keep=largest"]);
+    let kept = one(&reports);
+    assert_eq!(kept["components"], 1);
+    assert_eq!(kept["watertight"], true);
+    assert!(
+        close(number(kept, "volume"), balls[11]),
+        "{kept} vs {balls:?}"
+    );
+    let written = surface_volumes(&project.out("hollow_balls.ply"));
+    assert_eq!(written.len(), 2, "the cavity stays");
+    assert!(written.iter().any(|&v| v < 0.0));
+    assert_eq!(kept["removed"]["pieces"], 11);
 }
