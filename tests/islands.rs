@@ -352,3 +352,69 @@ fn tiled_hollow_balls_keep_their_cavities() {
     assert!(written.iter().any(|&v| v < 0.0));
     assert_eq!(kept["removed"]["pieces"], 11);
 }
+
+/// The chunked cache entries (a 48-byte header, then `LBCHUNK1`), largest first.
+fn chunked_entries(project: &Project) -> Vec<std::path::PathBuf> {
+    let mut stack = vec![project.path().join(".latticebuild")];
+    let mut found = Vec::new();
+    while let Some(dir) = stack.pop() {
+        for e in std::fs::read_dir(&dir).expect("dir") {
+            let path = e.expect("entry").path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if std::fs::read(&path)
+                .is_ok_and(|b| b.get(48..56) == Some(b"LBCHUNK1".as_slice()))
+            {
+                found.push(path);
+            }
+        }
+    }
+    found.sort_by_key(|p| std::cmp::Reverse(std::fs::metadata(p).expect("meta").len()));
+    found
+}
+
+/// A damaged tiling entry found by the filter's passes reruns the tiling, then the filter;
+/// the kept mesh is the same.
+#[test]
+fn a_corrupt_tiling_read_by_the_filter_reruns_the_tiling() {
+    let project = Project::new(MANIFEST);
+    project.build(&["balls", "--set", "outputs.balls.keep=largest"]);
+    let before = std::fs::read(project.out("balls.ply")).expect("ply");
+    let entries = chunked_entries(&project);
+    assert_eq!(entries.len(), 2, "the tiling's and the filter's");
+    let tiling = &entries[0];
+    let mut bytes = std::fs::read(tiling).expect("read");
+    let at = 56 + (bytes.len() - 56) / 3;
+    bytes[at] ^= 0x10;
+    std::fs::write(tiling, bytes).expect("write");
+    // Another threshold: the filter runs again and reads the damaged entry.
+    let out = project.run(&[
+        "build",
+        "lattice.toml",
+        "balls",
+        "-v",
+        "--report",
+        "report.json",
+        "--set",
+        "outputs.balls.keep=largest",
+        "--set",
+        "outputs.balls.min_island_volume=1e-9",
+    ]);
+    let text =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{text}");
+    assert!(text.contains("corrupt"), "{text}");
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(project.path().join("report.json")).expect("json"))
+            .expect("report");
+    // The kept mesh is the same bytes, so the write stops there (early cutoff).
+    assert_eq!(ran(&report), ["islands:balls", "tile:balls"], "{text}");
+    assert!(
+        text.contains("tile:balls: ran") && text.contains("its cache entry was corrupt"),
+        "{text}"
+    );
+    assert_eq!(
+        std::fs::read(project.out("balls.ply")).expect("ply"),
+        before
+    );
+}
