@@ -6,9 +6,10 @@
 //! Invariants:
 //! - A pure function of the filter and its input's payload; what a piece is, which cavity
 //!   belongs to which piece, and the output's order are `latticebuild_geom::islands`'s.
-//! - The result is a whole mesh payload whose summary (check, pieces) is of the kept mesh,
-//!   with what was removed beside it (`MeshSummary::removed`); the input's tiling, shell and
-//!   SDF box are carried over unchanged (they describe how the mesh was made).
+//! - The result is a mesh payload of the kind of its input (whole, or chunked for a 3D
+//!   tiling) whose summary (check, pieces) is of the kept mesh, with what was removed beside
+//!   it (`MeshSummary::removed`); the input's tiling, shell and SDF box are carried over
+//!   unchanged (they describe how the mesh was made).
 //! - A tiled (chunked) input is never held whole: it is read from its cache entry two or three
 //!   times, a chunk at a time (`geom::islands::IslandLabeller`: label the pieces; a ray pass
 //!   when a cavity's owner must be found; `IslandKeeper`: keep), and the kept chunks, checked
