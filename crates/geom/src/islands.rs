@@ -310,13 +310,14 @@ impl Queries {
         let contains = |outer: &Surface, inner: &Surface| {
             (0..3).all(|a| outer.min[a] <= inner.min[a] && inner.max[a] <= outer.max[a])
         };
+        let grid = SolidGrid::new(surfaces, &solids);
         let mut pairs: Vec<(u32, u32)> = Vec::new();
         let mut by_candidate: Vec<Vec<(f64, u32)>> = vec![Vec::new(); surfaces.len()];
         for k in 0..surfaces.len() as u32 {
             if surfaces[k as usize].volume > 0.0 {
                 continue;
             }
-            for &s in &solids {
+            for &s in grid.at(surfaces[k as usize].point) {
                 if contains(&surfaces[s as usize], &surfaces[k as usize]) {
                     let y = surfaces[k as usize].point[1];
                     by_candidate[s as usize].push((y, pairs.len() as u32));
@@ -375,6 +376,77 @@ impl Queries {
                 surfaces[k as usize].owner = Some(s);
             }
         }
+    }
+}
+
+/// The solids' boxes bucketed in a uniform grid over them (about one cell per solid, at most
+/// 64 per axis), so that finding the boxes around a cavity's point looks at the few solids
+/// listed in its cell, not at every solid (thousands of loose hollow balls would otherwise
+/// cost their number squared). Each cell lists its solids in increasing order.
+struct SolidGrid {
+    lo: [f64; 3],
+    scale: [f64; 3],
+    n: usize,
+    cells: Vec<Vec<u32>>,
+}
+
+impl SolidGrid {
+    fn new(surfaces: &[Surface], solids: &[u32]) -> SolidGrid {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for &s in solids {
+            for a in 0..3 {
+                lo[a] = lo[a].min(surfaces[s as usize].min[a]);
+                hi[a] = hi[a].max(surfaces[s as usize].max[a]);
+            }
+        }
+        let n = ((solids.len() as f64).cbrt().ceil() as usize).clamp(1, 64);
+        let scale = [0, 1, 2].map(|a| {
+            let extent = hi[a] - lo[a];
+            if extent > 0.0 && extent.is_finite() {
+                n as f64 / extent
+            } else {
+                0.0
+            }
+        });
+        let mut grid = SolidGrid {
+            lo,
+            scale,
+            n,
+            cells: vec![Vec::new(); n * n * n],
+        };
+        for &s in solids {
+            let (a, b) = (
+                grid.index(surfaces[s as usize].min),
+                grid.index(surfaces[s as usize].max),
+            );
+            for x in a[0]..=b[0] {
+                for y in a[1]..=b[1] {
+                    for z in a[2]..=b[2] {
+                        grid.cells[(x * n + y) * n + z].push(s);
+                    }
+                }
+            }
+        }
+        grid
+    }
+
+    /// The cell of a point, per axis (clamped into the grid).
+    fn index(&self, p: [f64; 3]) -> [usize; 3] {
+        [0, 1, 2].map(|a| {
+            let i = ((p[a] - self.lo[a]) * self.scale[a]).floor();
+            if i.is_nan() || i < 0.0 {
+                0
+            } else {
+                (i as usize).min(self.n - 1)
+            }
+        })
+    }
+
+    /// The solids whose boxes may hold `p` (every solid whose box does is listed).
+    fn at(&self, p: [f64; 3]) -> &[u32] {
+        let [x, y, z] = self.index(p);
+        &self.cells[(x * self.n + y) * self.n + z]
     }
 }
 

@@ -337,3 +337,36 @@ fn streamed_chunks_keep_what_the_whole_mesh_keeps() {
         ));
     }
 }
+
+/// Many hollow cubes and loose specks (the grid of solids' boxes at work): every cavity stays
+/// with its own cube.
+#[test]
+fn many_hollow_cubes_keep_their_own_cavities() {
+    let mut list = Vec::new();
+    for i in 0..4 {
+        for j in 0..4 {
+            for k in 0..4 {
+                let at = [2.0 * i as f32, 2.0 * j as f32, 2.0 * k as f32];
+                list.push((at, 1.0, false));
+                list.push((at.map(|x| x + 0.25), 0.5, true));
+                list.push((at.map(|x| x + 1.5), 0.1, false));
+            }
+        }
+    }
+    let mesh = boxes(&list);
+    let out = remove_islands(&mesh, &at_least(0.5), false).expect("kept");
+    assert_eq!(out.removal.pieces, 128);
+    assert_eq!(out.removal.pieces_removed, 64);
+    assert_eq!(out.mesh.triangles.len(), 64 * 24);
+    assert!(
+        near(volume(&out.mesh), 64.0 * 0.875),
+        "{}",
+        volume(&out.mesh)
+    );
+    // A threshold over a hollow cube's net volume (0.875) but under its outer one (1): the
+    // cavity counts, so every piece is under it: an error, not an empty mesh.
+    assert!(matches!(
+        remove_islands(&mesh, &at_least(0.9), false),
+        Err(IslandError::NothingKept { .. })
+    ));
+}
