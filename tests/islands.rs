@@ -243,6 +243,7 @@ fn bad_values_are_errors_at_their_place() {
             "keep = \"biggest\"",
             "unknown value `biggest` for `outputs.hollow.keep`",
         ),
+        ("keep = \"largets\"", "did you mean `\"largest\"`?"),
         ("keep = 1", "outputs.hollow.keep"),
         (
             "min_island_volume = 0",
