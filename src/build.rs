@@ -33,6 +33,7 @@ use latticebuild_geom::mesh_io::{Format, StlStream, Workers};
 use crate::cache::{Cache, CacheError, ContentHash, EntryReader, Key, Lookup, Opened, explain};
 use crate::graph::{Graph, NodeId};
 use crate::stages::chunked::{ChunkedMesh, ChunkedWriter, is_chunked};
+use crate::stages::islands::{IslandsFailure, IslandsStage};
 use crate::stages::tile::TileOutput;
 use crate::stages::write::{MeshInput, WriteError};
 use crate::stages::{MeshArtifact, OutputSink, PendingFile, Prewritten, Stage, WrittenOutput};
@@ -656,6 +657,59 @@ impl<'a> Builder<'a> {
         })
     }
 
+    /// The failure of an `islands` node reading node `input`.
+    fn islands_failure(&self, input: NodeId, failure: IslandsFailure) -> Failure {
+        match failure {
+            IslandsFailure::Failed(message) => Failure::Message(message),
+            IslandsFailure::CorruptInput(reason) => Failure::CorruptInput { input, reason },
+        }
+    }
+
+    /// Runs an `islands` node on a chunked mesh (node `input`'s entry): the kept chunks are
+    /// streamed into `key`'s entry by a writer thread, as a tiling's are, committed only if
+    /// the stage succeeds.
+    fn run_islands_chunked(
+        &self,
+        input: NodeId,
+        stage: &IslandsStage,
+        key: &Key,
+        mesh: &ChunkedMesh<EntryReader>,
+    ) -> Result<Value, Failure> {
+        let cache = self.cache;
+        std::thread::scope(|scope| {
+            let (send, receive) = mpsc::sync_channel::<Arc<MeshChunk>>(CHUNKS_IN_FLIGHT);
+            let writer = scope.spawn(move || -> Result<_, String> {
+                let pending = cache.begin_self_verified(key).map_err(|e| e.to_string())?;
+                let mut writer = ChunkedWriter::new(pending).map_err(|e| e.to_string())?;
+                for chunk in receive {
+                    writer
+                        .push(&chunk)
+                        .map_err(|e| format!("cannot write the cache entry: {e}"))?;
+                }
+                Ok(writer)
+            });
+            let head = stage.run_chunked(mesh, &mut |chunk| {
+                send.send(chunk)
+                    .map_err(|_| "the cache writer stopped".to_string())
+            });
+            drop(send);
+            let writer = writer
+                .join()
+                .map_err(|_| "the cache writer panicked".to_string())?;
+            // A writer error explains a stage's "writer stopped", so it comes first.
+            let writer = writer?;
+            let head = head.map_err(|failure| self.islands_failure(input, failure))?;
+            let (pending, _, check) = writer
+                .finish(head)
+                .map_err(|e| format!("cannot write the cache entry: {e}"))?;
+            pending.commit_declared(check).map_err(|e| e.to_string())?;
+            match self.open_chunked(key).map_err(|e| e.to_string())? {
+                Some(value) => Ok(value),
+                None => Err("the cache entry just written cannot be read back".into()),
+            }
+        })
+    }
+
     /// Starts a thread per single-pass file of the write nodes this build needs that read
     /// tile node `tile`, each writing its file from the chunks it is sent. Encoded on the
     /// thread itself ([`Workers::Caller`]): the rayon threads may all be blocked sending it
@@ -796,6 +850,14 @@ impl<'a> Builder<'a> {
                 let table = rest.last().copied().filter(|_| stage.reads_table());
                 self.run_tile(id, stage, &node.name, key, (cells, file, table))
             }
+            Stage::Islands(stage) => match input(0) {
+                Value::Mesh(mesh) => match stage.run(&mesh) {
+                    Ok(kept) => Ok(Value::Mesh(Arc::new(kept))),
+                    Err(failure) => Err(self.islands_failure(node.inputs[0], failure)),
+                },
+                Value::Chunked(mesh) => self.run_islands_chunked(node.inputs[0], stage, key, &mesh),
+                _ => Err(Failure::Message("input is not a mesh".into())),
+            },
             Stage::Write(stage) => {
                 let prewritten = self.take_prewritten(id, self.resolved[&node.inputs[0]].hash);
                 let input = match input(0) {
@@ -873,7 +935,7 @@ fn decode(stage: &Stage, payload: Vec<u8>) -> Result<Value, String> {
         | Stage::Combine(_)
         | Stage::Constrain(_)
         | Stage::Density(_) => Ok(Value::Bytes(Arc::new(payload))),
-        Stage::Contour(_) | Stage::Sdf(_) | Stage::Tile(_) => {
+        Stage::Contour(_) | Stage::Sdf(_) | Stage::Tile(_) | Stage::Islands(_) => {
             Ok(Value::Mesh(Arc::new(MeshArtifact::decode(&payload)?)))
         }
         Stage::Write(_) => serde_json::from_slice(&payload)

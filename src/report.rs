@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use crate::build::OutputResult;
 use crate::manifest::Manifest;
-use crate::stages::{ShellSummary, TilingSummary};
+use crate::stages::{Removed, ShellSummary, TilingSummary};
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Bbox {
@@ -41,6 +41,9 @@ pub struct Report {
     /// The largest piece's share of the volume (of the area, for a planar region), each
     /// piece measured within its outer surface.
     pub largest_component_fraction: f64,
+    /// What `keep`/`min_island_volume` removed (the other numbers describe what was kept).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub removed: Option<Removed>,
     /// A planar region of a 2D cell (open by nature: `watertight` is false).
     pub planar: bool,
     /// For an SDF output, the box it was contoured over (its bounds, when not given).
@@ -118,6 +121,7 @@ impl Report {
             thinnest_wall: result.written.shell.as_ref().and_then(|s| s.thinnest_wall),
             components: s.components,
             largest_component_fraction: s.largest_component_fraction,
+            removed: s.removed.clone(),
             warnings: pieces_warning(s.components, s.largest_component_fraction, planar)
                 .into_iter()
                 .chain(
@@ -198,6 +202,10 @@ impl Report {
         } else {
             validity
         };
+        let validity = match &self.removed {
+            Some(r) => format!("{validity}, {}", removed_text(r)),
+            None => validity,
+        };
         format!(
             "{}: {} triangles, {} vertices{tiled}, {validity}, volume fraction {:.4} -> {} ({:.2} s, {cached} of {} stages cached)",
             self.name,
@@ -244,6 +252,15 @@ fn pieces_warning(components: u64, largest: f64, planar: bool) -> Option<String>
             if planar { "area" } else { "volume" }
         )
     })
+}
+
+/// What the summary line says `keep`/`min_island_volume` removed.
+fn removed_text(r: &Removed) -> String {
+    match r.pieces {
+        0 => "no loose pieces removed".into(),
+        1 => format!("1 loose piece removed (volume {:.4e})", r.volume),
+        n => format!("{n} loose pieces removed (volume {:.4e})", r.volume),
+    }
 }
 
 /// A fraction as a percentage with two significant decimals where small (`0.3 %`, `97 %`).

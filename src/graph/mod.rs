@@ -10,9 +10,12 @@ pub mod status;
 
 use std::collections::BTreeMap;
 
+use latticebuild_geom::islands::IslandFilter;
+
 use crate::manifest::{CellSource, FitResolution, Manifest, MeshFile, ScaffoldSource};
 use crate::stages::Stage;
 use crate::stages::crystal::CrystalStage;
+use crate::stages::islands::IslandsStage;
 use crate::stages::mesh::{FileStage, MeshCellStage};
 use crate::stages::sdf::SdfStage;
 use crate::stages::sizing::{DensityStage, Over};
@@ -180,8 +183,8 @@ pub struct Cycle(pub Vec<String>);
 impl Graph {
     /// Compiles the manifest: the nodes of every cell an output uses (a `cell` node for plain
     /// cells, reading a `file` node for mesh cells; `cell → sample → fit → constrain`, or `blend`/`minkowski → constrain`, for
-    /// symmetric ones), then a `contour` (reading the part's `file` node too with `within`) and
-    /// a `write` node per output.
+    /// symmetric ones), then a `contour` (reading the part's `file` node too with `within`),
+    /// an `islands` node when the output removes loose pieces, and a `write` node per output.
     pub fn compile(manifest: &Manifest) -> Result<Graph, Cycle> {
         let mut graph = Graph::default();
         let mut compiler = CellCompiler {
@@ -203,7 +206,8 @@ impl Graph {
                 inputs.push(graph.density(&output.cell, density, cell_node));
             }
             let contour = graph.push(format!("contour:{name}"), stage, inputs);
-            let write = graph.push(format!("write:{name}"), Stage::write(output), vec![contour]);
+            let mesh = graph.islands(name, &output.islands, contour);
+            let write = graph.push(format!("write:{name}"), Stage::write(output), vec![mesh]);
             graph.outputs.insert(name.clone(), write);
         }
         // An SDF output: `sdf` reading a `file:` node per mesh of its program, then `write`.
@@ -217,7 +221,8 @@ impl Graph {
                 encoding: output.encoding,
                 stem: output.stem.clone(),
             };
-            let write = graph.push(format!("write:{name}"), Stage::Write(write), vec![solid]);
+            let mesh = graph.islands(name, &output.islands, solid);
+            let write = graph.push(format!("write:{name}"), Stage::Write(write), vec![mesh]);
             graph.outputs.insert(name.clone(), write);
         }
         // A tiled output: `tile` reading its cells' `constrain` nodes (and the scaffold's
@@ -242,7 +247,8 @@ impl Graph {
                 encoding: output.encoding,
                 stem: output.stem.clone(),
             };
-            let write = graph.push(format!("write:{name}"), Stage::Write(write), vec![tiled]);
+            let mesh = graph.islands(name, &output.islands, tiled);
+            let write = graph.push(format!("write:{name}"), Stage::Write(write), vec![mesh]);
             graph.outputs.insert(name.clone(), write);
         }
         graph.check_order()?;
@@ -282,6 +288,20 @@ impl Graph {
             return id;
         }
         self.push(name, Stage::Density(stage), vec![cell_node])
+    }
+
+    /// The node whose mesh output `name` writes: `mesh` itself, or an `islands` node reading
+    /// it when the output removes pieces (only then, so outputs without the keys keep the
+    /// graph, keys and cache entries they had).
+    fn islands(&mut self, name: &str, filter: &IslandFilter, mesh: NodeId) -> NodeId {
+        if !filter.is_active() {
+            return mesh;
+        }
+        let stage = Stage::Islands(IslandsStage {
+            output: name.to_string(),
+            filter: *filter,
+        });
+        self.push(format!("islands:{name}"), stage, vec![mesh])
     }
 
     fn push(&mut self, name: String, stage: Stage, inputs: Vec<NodeId>) -> NodeId {

@@ -6,6 +6,7 @@ use std::ops::Range;
 use std::path::PathBuf;
 
 use latticebuild_geom::field::Solid;
+use latticebuild_geom::islands::IslandFilter;
 use latticebuild_geom::mesh_io::{Encoding, Format};
 use latticebuild_geom::scaffold::ElementKind;
 use latticebuild_geom::sdf::Program;
@@ -193,6 +194,8 @@ pub struct Output {
     /// `skin = t`: a closed skin of thickness `t` (model units) along the part's surface;
     /// only with `within`.
     pub skin: Option<f64>,
+    /// `keep = "largest"`, `min_island_volume = V`: the pieces to remove (inactive: none).
+    pub islands: IslandFilter,
 }
 
 /// An output whose solid is an SDF program in the Cesogen stack language (`sdf = "…"`).
@@ -212,6 +215,8 @@ pub struct SdfOutput {
     pub encoding: Encoding,
     /// Output path stem relative to `out_dir` (default: the output's name).
     pub stem: String,
+    /// The pieces to remove, as for [`Output::islands`].
+    pub islands: IslandFilter,
 }
 
 /// How finely an SDF output is sampled.
@@ -321,6 +326,8 @@ pub struct TiledOutput {
     pub formats: Vec<Format>,
     pub encoding: Encoding,
     pub stem: String,
+    /// The pieces to remove, as for [`Output::islands`].
+    pub islands: IslandFilter,
 }
 
 /// How the region tiled into a 2D scaffold is made a closed solid (lengths in model units).

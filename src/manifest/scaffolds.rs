@@ -40,7 +40,7 @@ const GRID_KEYS: [&str; 4] = ["min", "max", "divisions", "element"];
 const GRID_ELEMENTS: [&str; 4] = ["hex", "tet", "quad", "tri"];
 const TRANSITION_KEYS: [&str; 2] = ["blend", "by"];
 /// The keys a tiled output reads; the other output keys are errors beside `scaffold`.
-const TILED_KEYS: [&str; 15] = [
+const TILED_KEYS: [&str; 17] = [
     "scaffold",
     "cell",
     "solid",
@@ -56,6 +56,8 @@ const TILED_KEYS: [&str; 15] = [
     "formats",
     "ascii",
     "path",
+    "keep",
+    "min_island_volume",
 ];
 /// The keys that make a 2D scaffold's region a solid (at most one).
 const THICKEN_KEYS: [&str; 2] = ["extrude", "thickness_normal"];
@@ -461,6 +463,10 @@ impl Checker<'_, '_, '_> {
             None => Some(name.to_string()),
             Some((_, v)) => self.stem(&path("path"), v),
         };
+        // A 2D grid's region stays a surface unless thickened: its pieces have no volume.
+        let region = grid_element.is_some_and(|e| e.dimension() == 2)
+            && !THICKEN_KEYS.iter().any(|k| fields.contains_key(k));
+        let islands = self.islands(name, &fields, region);
         if self.report.len() > before {
             return None;
         }
@@ -481,6 +487,7 @@ impl Checker<'_, '_, '_> {
             formats: formats?,
             encoding: encoding?,
             stem: stem?,
+            islands: islands?,
         })
     }
 

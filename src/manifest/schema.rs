@@ -28,6 +28,8 @@ use crate::diagnostics::Diagnostic;
 
 #[path = "crystals.rs"]
 mod crystals;
+#[path = "islands.rs"]
+mod islands;
 #[path = "meshes.rs"]
 mod meshes;
 #[path = "output_files.rs"]
@@ -66,7 +68,7 @@ const CELL_KEYS: [&str; 18] = [
     "offset",
     "invert",
 ];
-const OUTPUT_KEYS: [&str; 19] = [
+const OUTPUT_KEYS: [&str; 21] = [
     "cell",
     "sdf",
     "bounds",
@@ -86,6 +88,8 @@ const OUTPUT_KEYS: [&str; 19] = [
     "path",
     "within",
     "skin",
+    "keep",
+    "min_island_volume",
 ];
 const DOMAIN_KEYS: [&str; 2] = ["min", "max"];
 const SOLIDS: [&str; 4] = ["inside", "outside", "shell", "eccentric_shell"];
@@ -115,7 +119,7 @@ pub(crate) fn expects_string(path: &[&str]) -> bool {
             | [
                 "outputs",
                 _,
-                "cell" | "sdf" | "over" | "solid" | "path" | "within" | "scaffold"
+                "cell" | "sdf" | "over" | "solid" | "path" | "within" | "scaffold" | "keep"
             ]
             | ["outputs", _, "cell", "by"]
             | ["scaffolds", _, "mesh"]
@@ -409,6 +413,7 @@ impl Checker<'_, '_, '_> {
             Some((_, v)) => self.stem(&path("path"), v),
         };
         let (within, skin) = self.within(name, &fields, over_element, planar);
+        let islands = self.islands(name, &fields, planar);
 
         if self.report.len() > before {
             return None;
@@ -436,6 +441,7 @@ impl Checker<'_, '_, '_> {
             stem: stem?,
             within: within?,
             skin: skin?,
+            islands: islands?,
         })
     }
 

@@ -131,6 +131,7 @@ impl Checker<'_, '_, '_> {
             None => Some(name.to_string()),
             Some((_, v)) => self.stem(&path("path"), v),
         };
+        let islands = self.islands(name, &fields, false);
         if self.report.len() > before {
             return None;
         }
@@ -144,6 +145,7 @@ impl Checker<'_, '_, '_> {
             formats: formats?,
             encoding: encoding?,
             stem: stem?,
+            islands: islands?,
         })
     }
 

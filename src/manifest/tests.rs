@@ -910,6 +910,7 @@ fn output(name: &str, span: Option<std::ops::Range<usize>>) -> Output {
         stem: name.into(),
         within: None,
         skin: None,
+        islands: Default::default(),
     }
 }
 

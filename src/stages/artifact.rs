@@ -41,6 +41,22 @@ pub struct MeshSummary {
     pub components: u64,
     #[serde(default)]
     pub largest_component_fraction: f64,
+    /// What the `islands` stage removed to make this mesh (`None`: nothing was asked to be);
+    /// absent otherwise, so other payloads keep their bytes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub removed: Option<Removed>,
+}
+
+/// The pieces the `islands` stage removed (`keep`, `min_island_volume`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Removed {
+    /// Solid pieces removed.
+    pub pieces: u64,
+    /// The volume removed (signed: kept plus removed is the mesh before).
+    pub volume: f64,
+    /// The largest removed piece's volume (0 when none was).
+    pub largest_piece: f64,
+    pub triangles: u64,
 }
 
 impl MeshSummary {
@@ -79,6 +95,7 @@ impl MeshSummary {
             duplicate_positions: c.duplicate_positions as u64,
             components: 0,
             largest_component_fraction: 0.0,
+            removed: None,
         }
     }
 }

@@ -374,14 +374,34 @@ impl<R: ReadAt> ChunkSource for ChunkedMesh<R> {
         pass: Pass,
         visit: &mut dyn FnMut(&MeshChunk) -> io::Result<()>,
     ) -> io::Result<()> {
-        // One chunk's buffers, reused: memory is the largest chunk, whatever the mesh.
-        let mut chunk = MeshChunk::default();
-        let mut borrowed: Vec<[u32; 4]> = Vec::new();
-        let (vertices, triangles, borrows, open) = match pass {
+        let sections = match pass {
             Pass::Vertices => (true, false, false, false),
             Pass::Triangles => (false, true, false, false),
             Pass::Facets => (true, true, true, false),
         };
+        self.visit_chunks(sections, visit)
+    }
+}
+
+impl<R: ReadAt> ChunkedMesh<R> {
+    /// Calls `visit` with every chunk whole — vertices, triangles, borrowed and open — in
+    /// order (what a pass that relabels the mesh needs), each section verified as it is read.
+    pub fn for_each_whole_chunk(
+        &self,
+        visit: &mut dyn FnMut(&MeshChunk) -> io::Result<()>,
+    ) -> io::Result<()> {
+        self.visit_chunks((true, true, true, true), visit)
+    }
+
+    /// Visits every chunk with the sections named (vertices, triangles, borrowed, open).
+    fn visit_chunks(
+        &self,
+        (vertices, triangles, borrows, open): (bool, bool, bool, bool),
+        visit: &mut dyn FnMut(&MeshChunk) -> io::Result<()>,
+    ) -> io::Result<()> {
+        // One chunk's buffers, reused: memory is the largest chunk, whatever the mesh.
+        let mut chunk = MeshChunk::default();
+        let mut borrowed: Vec<[u32; 4]> = Vec::new();
         for (k, entry) in self.trailer.chunks.iter().enumerate() {
             chunk.first_vertex = entry.first_vertex;
             if vertices {
@@ -433,6 +453,7 @@ mod tests {
             duplicate_positions: 0,
             components: 1,
             largest_component_fraction: 1.0,
+            removed: None,
         }
     }
 

@@ -22,6 +22,7 @@
 //! | `constrain` | group, normal_to_faces, offset, invert                | coefficient table | coefficient table + constraint report |
 //! | `tile`    | scaffold (extension, or grid), group, by, solid, offset, thickness, graded thickness/offset, sizing, resolution, skin | cell table(s) (+ scaffold file bytes) (+ density table) | mesh + its check + the tiling's counts and scaffold volume |
 //! | `sdf`     | canonical program (paths as input numbers), bounds, samples or voxel | the `file` words' bytes | mesh + its check + the box |
+//! | `islands` | keep, min_island_volume                                 | contour, sdf or tile payload | the kept mesh + its check + what was removed ([`islands`]) |
 //! | `write`   | formats, encoding, path stem                            | contour payload| files written and the mesh summary (JSON) |
 
 pub mod artifact;
@@ -29,6 +30,7 @@ pub mod cell;
 pub mod chunked;
 pub mod contour;
 pub mod crystal;
+pub mod islands;
 pub mod mesh;
 pub mod sdf;
 pub mod sizing;
@@ -40,7 +42,7 @@ use crate::cache::{ContentHash, Key, KeyBuilder, KeyDescription, KeyError};
 use crate::manifest::{Cell, Output};
 
 pub use artifact::{
-    MeshArtifact, MeshSummary, ShellSummary, TilingSummary, WrittenFile, WrittenOutput,
+    MeshArtifact, MeshSummary, Removed, ShellSummary, TilingSummary, WrittenFile, WrittenOutput,
 };
 pub use write::{OutputSink, PendingFile, Prewritten};
 
@@ -59,6 +61,7 @@ pub enum Stage {
     Contour(contour::ContourStage),
     Sdf(sdf::SdfStage),
     Tile(tile::TileStage),
+    Islands(islands::IslandsStage),
     Write(write::WriteStage),
 }
 
@@ -90,6 +93,7 @@ impl Stage {
             Stage::Contour(_) => "contour",
             Stage::Sdf(_) => "sdf",
             Stage::Tile(_) => "tile",
+            Stage::Islands(_) => "islands",
             Stage::Write(_) => "write",
         }
     }
@@ -107,6 +111,7 @@ impl Stage {
             Stage::Contour(_) => contour::VERSION,
             Stage::Sdf(_) => sdf::VERSION,
             Stage::Tile(_) => tile::VERSION,
+            Stage::Islands(_) => islands::VERSION,
             Stage::Write(_) => write::VERSION,
         }
     }
@@ -127,6 +132,7 @@ impl Stage {
             Stage::Contour(s) => s.key_params(builder),
             Stage::Sdf(s) => s.key_params(builder),
             Stage::Tile(s) => s.key_params(builder),
+            Stage::Islands(s) => s.key_params(builder),
             Stage::Write(s) => s.key_params(builder),
         };
         let builder = inputs
@@ -155,7 +161,7 @@ impl Stage {
             Stage::Tile(s) if i < s.cell_inputs() => format!("cell {}", i + 1),
             Stage::Tile(s) if i == s.cell_inputs() && s.reads_file() => "scaffold".into(),
             Stage::Tile(_) => "density table".into(),
-            Stage::Write(_) => "mesh".into(),
+            Stage::Islands(_) | Stage::Write(_) => "mesh".into(),
         }
     }
 }

@@ -17,6 +17,7 @@ pub mod element;
 pub mod expr;
 pub mod field;
 pub mod graded;
+pub mod islands;
 pub mod mesh;
 pub mod mesh_io;
 pub mod mesh_read;
