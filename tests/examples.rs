@@ -13,11 +13,6 @@ use std::process::Command;
 const MANY_PIECES: &[(&str, &str, &str)] = &[
     (
         "cesogen.toml",
-        "hierarchical",
-        "the Cesogen paper's Figure 6 as it is: the coarser P and D solids cut bits off the gyroid",
-    ),
-    (
-        "cesogen.toml",
         "two_rods",
         "§4.3's two rods, 4 apart, joined by `union` without touching",
     ),
