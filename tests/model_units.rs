@@ -240,7 +240,7 @@ formats = ["ply"]
         assert!(
             report["sizing"]["iterations"]
                 .as_u64()
-                .is_some_and(|n| n > 10)
+                .is_some_and(|n| n == 12)
         );
         let warnings = report["warnings"].to_string();
         assert!(!warnings.contains("volume fraction is"), "{report}");

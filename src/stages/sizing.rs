@@ -183,7 +183,7 @@ pub struct SizingSummary {
     /// …or the wall solved (model units, shells).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub solved_wall: Option<f64>,
-    /// Bisection steps of a uniform solve.
+    /// Bisection steps over the table of a uniform solve.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub iterations: Option<u32>,
 }
