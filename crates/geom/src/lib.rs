@@ -14,6 +14,7 @@ pub mod contour2d;
 pub mod element;
 pub mod expr;
 pub mod field;
+pub mod measure;
 pub mod mesh;
 pub mod mesh_io;
 pub mod mesh_read;
