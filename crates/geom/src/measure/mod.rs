@@ -13,6 +13,18 @@
 //!   between the solid walls (centred inside the grid), as if the void went on. The grid
 //!   holds one voxel of margin round the box; the margin's voxels can centre balls but are
 //!   not counted.
+//! - Accuracy (tests, voxel side Δ): slabs of width 2Δ to 8.5Δ, axis-aligned with the
+//!   mid-plane between samples or oblique, measure a median wall within 0.01 % of `W`; a
+//!   spherical shell of wall 2.6Δ (radius 12Δ) within 0.02 %; a spherical cavity of
+//!   diameter 13.2Δ within 0.1 %. Voxels near edges and corners (a slab's rim) read less
+//!   than a true maximal ball would give them (their own ball), so `min` and `p05` are
+//!   conservative there.
+//! - Cost: one feature transform per phase (linear), then two exact mesh-distance queries
+//!   per ridge candidate (about the phase's medial surface in voxels), then ball painting
+//!   (each ball's volume in voxels). A gyroid sheet of 2³ cells at 200³ samples (1.6 M
+//!   triangles) takes about 70 s in the test profile on 2 shared cores, against 0.5 s to
+//!   contour it: far too slow to run on every build at the build's own resolution (see the
+//!   report); the mesh-distance queries dominate.
 //! - Nothing panics on degenerate input (empty mesh, NaN positions, bad indices, zero or NaN
 //!   spacing): the figures are `None` instead.
 

@@ -58,16 +58,11 @@ pub fn local_thickness(grid: &Grid, inside: &[bool], phase: bool, surface: &Surf
         return vec![0.0; inside.len()];
     }
     let dims = grid.dims;
-    let clock = std::time::Instant::now();
-    let debug = std::env::var("LB_DEBUG").is_ok();
     let seeds: Vec<bool> = inside.iter().map(|&s| s != phase).collect();
     let feature = edt::feature_transform(dims, &seeds);
     drop(seeds);
     if feature.first().is_none_or(|&f| f == NONE) {
         return vec![0.0; n];
-    }
-    if debug {
-        eprintln!("edt {:?}", clock.elapsed());
     }
     let strides = [1, dims[0], dims[0] * dims[1]];
     // Exact distance and direction for a voxel, hinted at its grid feature.
@@ -140,14 +135,6 @@ pub fn local_thickness(grid: &Grid, inside: &[bool], phase: bool, surface: &Surf
         .collect();
     // 3. Painting, plane by plane.
     let mut balls = balls;
-    if debug {
-        let big = balls.iter().map(|b| b.radius).fold(0.0, f64::max);
-        eprintln!(
-            "phase {phase}: {} balls, largest {big}, {:?}",
-            balls.len(),
-            clock.elapsed()
-        );
-    }
     balls.sort_by(|a, b| a.centre[2].total_cmp(&b.centre[2]));
     let reach_max = balls.iter().map(|b| b.radius).fold(0.0, f64::max) + 0.5 * grid.spacing;
     let mut thickness = vec![0.0f32; n];
@@ -165,9 +152,6 @@ pub fn local_thickness(grid: &Grid, inside: &[bool], phase: bool, surface: &Surf
                 paint(grid, inside, phase, z, zc, ball, out);
             }
         });
-    if debug {
-        eprintln!("painted {:?}", clock.elapsed());
-    }
     // 4. Voxels no ball reached.
     thickness
         .par_iter_mut()
