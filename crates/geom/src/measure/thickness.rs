@@ -127,7 +127,13 @@ pub fn local_thickness(grid: &Grid, inside: &[bool], phase: bool, surface: &Surf
                         centre: p,
                         radius: e.0,
                     };
-                    [Some(own), chord_ball(grid, inside, phase, surface, e)]
+                    let chord = chord_ball(grid, inside, phase, surface, e);
+                    // A ball inside the chord's adds nothing but painting time.
+                    let inner = chord.is_some_and(|b| {
+                        let gap: f64 = (0..3).map(|a| (b.centre[a] - p[a]).powi(2)).sum();
+                        gap.sqrt() + own.radius <= b.radius
+                    });
+                    [(!inner).then_some(own), chord]
                 })
                 .flatten()
                 .collect::<Vec<_>>()
