@@ -406,8 +406,8 @@ impl<F: Fn([f64; 3]) -> f64 + Sync> crate::field::PlaneSampler for Sampled<F> {
 }
 
 /// The cost of the measure against the cost of contouring, for a gyroid sheet of 2×2×2
-/// cells at `LB_MEASURE_N`³ samples (default 100): `cargo test -p latticebuild-geom
-/// measure::tests::cost -- --ignored --nocapture`.
+/// cells at `LB_MEASURE_N`³ samples (default 100), measured on `LB_MEASURE_M`³ voxels:
+/// `cargo test -p latticebuild-geom measure::tests::cost -- --ignored --nocapture`.
 #[test]
 #[ignore = "a timing, not a property"]
 fn cost() {
@@ -430,7 +430,12 @@ fn cost() {
         .mesh;
     let contoured = start.elapsed();
     let start = std::time::Instant::now();
-    let t = thickness(&mesh, Some([[0.125; 3], [2.125; 3]]), 2.0 / (n - 1) as f64);
+    // Measured on `LB_MEASURE_M`³ voxels (default: the samples' own spacing).
+    let m: usize = std::env::var("LB_MEASURE_M")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(n - 1);
+    let t = thickness(&mesh, Some([[0.125; 3], [2.125; 3]]), 2.0 / m.max(1) as f64);
     let measured = start.elapsed();
     let start = std::time::Instant::now();
     let topology = solid_genera(&mesh);
