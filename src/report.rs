@@ -32,6 +32,11 @@ pub struct Report {
     pub euler_characteristic: i64,
     pub volume: f64,
     pub area: f64,
+    /// Area over volume, per unit of [`Report::units`] (`null` for a planar region or a mesh
+    /// of no volume).
+    pub specific_surface: Option<f64>,
+    /// What lengths are in (`[build] units`).
+    pub units: String,
     /// Volume over the domain's volume; for a planar region (2D cell), area over the element's.
     pub volume_fraction: f64,
     /// Solid pieces of the mesh (connected surfaces of positive volume, so a cavity inside a
@@ -113,6 +118,8 @@ impl Report {
             euler_characteristic: s.euler_characteristic,
             volume: s.volume,
             area: s.area,
+            specific_surface: specific_surface(s.area, s.volume, planar),
+            units: manifest.units.clone(),
             // A planar region reports its share of the element's area.
             volume_fraction,
             planar,
@@ -242,6 +249,11 @@ fn fraction_warning(
 /// How far a built volume fraction may be from the one asked before the report says so.
 pub const FRACTION_TOLERANCE: f64 = 0.01;
 
+/// Area over volume for a solid of positive, finite volume.
+fn specific_surface(area: f64, volume: f64, planar: bool) -> Option<f64> {
+    (!planar && volume > 0.0 && volume.is_finite() && area.is_finite()).then(|| area / volume)
+}
+
 /// The warning for a mesh of more than one piece, with the largest piece's share.
 fn pieces_warning(components: u64, largest: f64, planar: bool) -> Option<String> {
     (components > 1).then(|| {
@@ -294,7 +306,24 @@ fn defects(watertight: bool, manifold: bool, planar: bool) -> Vec<String> {
 
 #[cfg(test)]
 mod tests {
-    use super::{defects, percent, pieces_warning};
+    use super::{defects, percent, pieces_warning, specific_surface};
+
+    #[test]
+    fn specific_surface_is_area_over_volume_of_a_solid() {
+        // A unit cube: 6 / 1; a sphere of radius 2: 3 / r.
+        assert_eq!(specific_surface(6.0, 1.0, false), Some(6.0));
+        let r: f64 = 2.0;
+        let pi = std::f64::consts::PI;
+        let s = specific_surface(4.0 * pi * r * r, 4.0 / 3.0 * pi * r.powi(3), false);
+        assert!(s.is_some_and(|s| (s - 1.5).abs() < 1e-12), "{s:?}");
+        assert_eq!(specific_surface(1.0, 0.0, false), None);
+        assert_eq!(
+            specific_surface(1.0, 1.0, true),
+            None,
+            "a planar region has no volume"
+        );
+        assert_eq!(specific_surface(f64::NAN, 1.0, false), None);
+    }
 
     #[test]
     fn more_than_one_piece_is_a_warning_with_the_largest_share() {

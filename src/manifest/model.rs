@@ -20,6 +20,8 @@ pub struct Manifest {
     pub root: PathBuf,
     /// Where outputs are written (`[build] out_dir`, default `out/` next to the manifest).
     pub out_dir: PathBuf,
+    /// What the model's lengths are in (`[build] units`, default `"mm"`), echoed in reports.
+    pub units: String,
     pub cells: BTreeMap<String, Cell>,
     pub outputs: BTreeMap<String, Output>,
     /// Outputs whose solid is an SDF program (`sdf = "…"`); their names differ from those of

@@ -47,7 +47,9 @@ type Key<'i> = Spanned<DeString<'i>>;
 type Value<'i> = Spanned<DeValue<'i>>;
 
 const TOP_KEYS: [&str; 4] = ["build", "cells", "scaffolds", "outputs"];
-const BUILD_KEYS: [&str; 1] = ["out_dir"];
+const BUILD_KEYS: [&str; 2] = ["out_dir", "units"];
+/// The length units `[build] units` accepts: what the model's numbers mean (reports echo it).
+pub(crate) const UNITS: [&str; 5] = ["mm", "cm", "m", "um", "in"];
 const CELL_KEYS: [&str; 18] = [
     "tpms",
     "expr",
@@ -104,6 +106,7 @@ pub(crate) fn expects_string(path: &[&str]) -> bool {
     matches!(
         path,
         ["build", "out_dir"]
+            | ["build", "units"]
             | [
                 "cells",
                 _,
@@ -155,12 +158,13 @@ pub(crate) fn validate(
         root: dir.clone(),
     };
     let mut out_dir = Some("out".to_string());
+    let mut units = Some("mm".to_string());
     let mut cells_table = None;
     let mut scaffolds_table = None;
     let mut outputs_table = None;
     for (key, value) in root {
         match key.get_ref().as_ref() {
-            "build" => out_dir = checker.build(value),
+            "build" => (out_dir, units) = checker.build(value),
             "cells" => {
                 cells_table = checker.table("cells", value, "define cells as `[cells.NAME]` tables")
             }
@@ -247,6 +251,7 @@ pub(crate) fn validate(
     let manifest = Manifest {
         path: manifest_path.to_path_buf(),
         out_dir,
+        units: units?,
         root: dir,
         inputs,
         cells,
@@ -290,10 +295,40 @@ struct Checker<'r, 's, 'a> {
 impl Checker<'_, '_, '_> {
     // ---- sections ------------------------------------------------------------------------
 
-    fn build(&mut self, value: &Value<'_>) -> Option<String> {
-        let table = self.table("build", value, "write it as a `[build]` table")?;
+    /// `[build]`: the output directory and the length units (`None` each where invalid).
+    fn build(&mut self, value: &Value<'_>) -> (Option<String>, Option<String>) {
+        let Some(table) = self.table("build", value, "write it as a `[build]` table") else {
+            return (None, None);
+        };
         let fields = self.fields(table, &BUILD_KEYS, "in `[build]`");
-        let Some((_, value)) = fields.get("out_dir") else {
+        let units = match fields.get("units") {
+            None => Some("mm".to_string()),
+            Some((_, value)) => self.units(value),
+        };
+        (self.out_dir(fields.get("out_dir").map(|(_, v)| *v)), units)
+    }
+
+    /// `build.units`: one of [`UNITS`].
+    fn units(&mut self, value: &Value<'_>) -> Option<String> {
+        let units = self.string("build.units", value)?;
+        if UNITS.contains(&units) {
+            return Some(units.to_string());
+        }
+        let help = format!(
+            "use one of {}",
+            UNITS.map(|u| format!("`\"{u}\"`")).join(", ")
+        );
+        self.error(
+            value.span(),
+            &format!("unknown length unit `{units}` in `build.units`"),
+            "unknown unit",
+            Some(&help),
+        );
+        None
+    }
+
+    fn out_dir(&mut self, value: Option<&Value<'_>>) -> Option<String> {
+        let Some(value) = value else {
             return Some("out".to_string());
         };
         let dir = self.string("build.out_dir", value)?;

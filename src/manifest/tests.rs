@@ -679,7 +679,7 @@ error: unknown key `out` in `[build]`
 6 | out = 1
   | ^^^ unknown key
   |
-  = help: expected one of `out_dir`
+  = help: expected one of `out_dir`, `units`
 
 error: could not load `lattice.toml` due to 3 previous errors
 ",
@@ -934,6 +934,7 @@ fn defaults_are_filled_in() {
         path: PathBuf::from("parts/lattice.toml"),
         root: PathBuf::from("parts"),
         out_dir: PathBuf::from("parts/out"),
+        units: "mm".into(),
         cells: BTreeMap::from([(
             "gyroid".to_string(),
             Cell {
@@ -1440,4 +1441,17 @@ fn a_broken_file_shows_its_first_ten_syntax_errors_and_counts_the_rest() {
     assert!(hidden > 3000, "{note}");
     // The ten shown are the first in the file.
     assert!(rendered.contains("lattice.toml:2:"), "{rendered}");
+}
+
+#[test]
+fn build_units_default_to_mm_and_must_be_known() {
+    let base = "[cells.g]\ntpms = \"gyroid\"\n\n[outputs.g]\ncell = \"g\"\n\
+                domain = { min = [0, 0, 0], max = [1, 1, 1] }\nsamples = 8\n";
+    assert_eq!(parse_ok(base, &[]).units, "mm");
+    let inch = format!("[build]\nunits = \"in\"\n\n{base}");
+    assert_eq!(parse_ok(&inch, &[]).units, "in");
+    let bad = format!("[build]\nunits = \"furlong\"\n\n{base}");
+    let diags = parse(&bad, Path::new("lattice.toml"), &[]).expect_err("furlong is no unit");
+    let text = render(&diags);
+    assert!(text.contains("unknown length unit `furlong`"), "{text}");
 }

@@ -18,6 +18,7 @@ pub mod expr;
 pub mod field;
 pub mod graded;
 pub mod islands;
+pub mod measure;
 pub mod mesh;
 pub mod mesh_io;
 pub mod mesh_read;
