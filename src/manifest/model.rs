@@ -60,7 +60,7 @@ pub enum CellSource {
     /// A free-form expression in the cell coordinates x, y, z (period 1 is up to the user).
     Expr(String),
     /// Weighted average of the coefficients of symmetric cells of one group (names of cells;
-    /// weights as given, not normalised).
+    /// weights as given here, divided by their sum when blended).
     Blend {
         cells: Vec<String>,
         weights: Vec<f64>,
