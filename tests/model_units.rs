@@ -436,3 +436,58 @@ formats = ["ply"]
         assert!((built - phi).abs() < tolerance, "{name}: {built}");
     }
 }
+
+/// Graded values on a tiling go through the nodes: a constant expression builds what the
+/// uniform value does, for a wall (converted per node by the element scale) and a volume
+/// fraction (the table read per node); a fraction out of range at a node is an error naming
+/// it.
+#[test]
+fn graded_tiled_values_match_uniform_ones_where_constant() {
+    let tiled = |name: &str, key: &str, value: &str| {
+        format!(
+            r#"
+[outputs.{name}]
+scaffold = "hexes"
+cell = "p"
+solid = "shell"
+{key} = {value}
+resolution = 17
+formats = ["ply"]
+"#
+        )
+    };
+    let mut manifest = r#"
+[cells.p]
+tpms = "p"
+symmetry = "Oh"
+fit = { n = 32 }
+
+[scaffolds.hexes]
+grid = { min = [0, 0, 0], max = [12, 8, 8], divisions = [3, 2, 2], element = "hex" }
+"#
+    .to_string();
+    manifest.push_str(&tiled("wall", "wall", "0.4"));
+    manifest.push_str(&tiled("wall_graded", "wall", "\"0.4 + 0 * x\""));
+    manifest.push_str(&tiled("fraction", "volume_fraction", "0.2"));
+    manifest.push_str(&tiled("fraction_graded", "volume_fraction", "\"0.2 + 0 * x\""));
+    let project = Project::new(&manifest);
+    let reports = project.build(&[]);
+    for (uniform, graded) in [("wall", "wall_graded"), ("fraction", "fraction_graded")] {
+        let (u, g) = (
+            number(by_name(&reports, uniform), "volume"),
+            number(by_name(&reports, graded), "volume"),
+        );
+        assert!((u - g).abs() < 1e-3 * u, "{uniform}: {u} vs {g}");
+    }
+    project.write(
+        "lattice.toml",
+        &manifest.replace("\"0.2 + 0 * x\"", "\"x / 10\""),
+    );
+    let out = project.run(&["build", "lattice.toml"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("volume_fraction` is 0 at node") && stderr.contains("reachable range"),
+        "{stderr}"
+    );
+}
