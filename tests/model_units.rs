@@ -469,7 +469,11 @@ grid = { min = [0, 0, 0], max = [12, 8, 8], divisions = [3, 2, 2], element = "he
     manifest.push_str(&tiled("wall", "wall", "0.4"));
     manifest.push_str(&tiled("wall_graded", "wall", "\"0.4 + 0 * x\""));
     manifest.push_str(&tiled("fraction", "volume_fraction", "0.2"));
-    manifest.push_str(&tiled("fraction_graded", "volume_fraction", "\"0.2 + 0 * x\""));
+    manifest.push_str(&tiled(
+        "fraction_graded",
+        "volume_fraction",
+        "\"0.2 + 0 * x\"",
+    ));
     let project = Project::new(&manifest);
     let reports = project.build(&[]);
     for (uniform, graded) in [("wall", "wall_graded"), ("fraction", "fraction_graded")] {
