@@ -257,9 +257,16 @@ fn specific_surface(area: f64, volume: f64, planar: bool) -> Option<f64> {
 /// The warning for a mesh of more than one piece, with the largest piece's share.
 fn pieces_warning(components: u64, largest: f64, planar: bool) -> Option<String> {
     (components > 1).then(|| {
+        // A planar region cannot drop pieces (their drawing would keep them).
+        let remedy = if planar {
+            "check the sizing or the cell's fit"
+        } else {
+            "check the sizing or the cell's fit, or drop them with `keep = \"largest\"` or \
+             `min_island_volume`"
+        };
         format!(
             "the mesh is {components} separate pieces; the largest holds {} of the {}: loose \
-             pieces fall out of a print (check the offset or thickness, or the cell's fit)",
+             pieces fall out of a print ({remedy})",
             percent(largest),
             if planar { "area" } else { "volume" }
         )

@@ -136,6 +136,10 @@ pub struct ShellSummary {
     /// the reference element (an estimate where elements are curved or stretched).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub tiled: bool,
+    /// Sized by `wall` or `volume_fraction`: `thickness` is then a width of the distance field
+    /// (normalised for a graded one), and the advice is a thicker `wall`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub sized: bool,
 }
 
 /// The tiler's highest resolution (points per element edge).
@@ -153,6 +157,20 @@ impl ShellSummary {
         let wall = self.thinnest_wall.filter(|&w| w < Self::THIN_WALL)?;
         let factor = Self::THIN_WALL / wall;
         let more = |n: usize| ((n - 1) as f64 * factor).ceil() as u64 + 1;
+        let (measured, larger) = if self.sized {
+            (
+                "measured on the distance field the wall is sized on".to_string(),
+                "a thicker `wall` (or a higher `volume_fraction`)",
+            )
+        } else {
+            (
+                format!(
+                    "thickness {} over the steepest field gradient",
+                    self.thickness
+                ),
+                "a larger thickness",
+            )
+        };
         let effect = if self.sampled {
             "poorly resolved, and the thinner ones can vanish (this solid is sampled as one \
              function, not contoured from its two levels)"
@@ -163,11 +181,9 @@ impl ShellSummary {
             let resolution = more(self.samples[0]);
             let advice = if resolution > MAX_RESOLUTION {
                 return Some(format!(
-                    "the thinnest shell wall is about {wall:.2} lattice spacings (thickness {} \
-                     over the steepest field gradient); walls under {} spacings are {effect}, \
-                     and even the highest resolution ({MAX_RESOLUTION}) leaves it under {}: \
-                     use a larger thickness",
-                    self.thickness,
+                    "the thinnest shell wall is about {wall:.2} lattice spacings ({measured}); \
+                     walls under {} spacings are {effect}, and even the highest resolution \
+                     ({MAX_RESOLUTION}) leaves it under {}: use {larger}",
                     Self::THIN_WALL,
                     Self::THIN_WALL,
                 ));
@@ -180,10 +196,8 @@ impl ShellSummary {
             ("sample spacings", format!("{} samples", counts.join(" × ")))
         };
         Some(format!(
-            "the thinnest shell wall is about {wall:.2} {spacings} (thickness {} over the \
-             steepest field gradient); walls under {} spacings are {effect}: use about \
-             {advice}, or a larger thickness",
-            self.thickness,
+            "the thinnest shell wall is about {wall:.2} {spacings} ({measured}); walls under {} \
+             spacings are {effect}: use about {advice}, or {larger}",
             Self::THIN_WALL,
         ))
     }

@@ -217,8 +217,13 @@ impl ContourStage {
             ..self.clone()
         };
         let artifact = stage.contour_field(&*sized.field, part, progress)?;
+        let sized_shell = sized.summary.is_some();
         Ok(MeshArtifact {
             sizing: sized.summary,
+            shell: artifact.shell.map(|shell| ShellSummary {
+                sized: sized_shell,
+                ..shell
+            }),
             ..artifact
         })
     }
@@ -317,6 +322,7 @@ impl ContourStage {
             samples,
             sampled,
             tiled: false,
+            sized: false,
         }
     }
 

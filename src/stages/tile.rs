@@ -432,6 +432,7 @@ impl TileStage {
             samples: [self.resolution; 3],
             sampled: false,
             tiled: true,
+            sized: !matches!(self.sizing, Sizing::Field),
         })
     }
 
