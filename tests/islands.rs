@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{Project, ran};
+use common::{Project, number, ran};
 
 /// Schwarz P's `f ≥ offset` in each hexahedron of a 3 × 2 × 2 grid is a ball about the
 /// element's centre (P is 3 there and at most 1 on the faces); a graded offset makes the 12
@@ -120,12 +120,6 @@ fn surface_volumes(path: &std::path::Path) -> Vec<f64> {
         }) += v;
     }
     order.iter().map(|r| volume[r]).collect()
-}
-
-fn number(report: &serde_json::Value, key: &str) -> f64 {
-    report[key]
-        .as_f64()
-        .unwrap_or_else(|| panic!("{key} in {report}"))
 }
 
 fn one(reports: &serde_json::Value) -> &serde_json::Value {

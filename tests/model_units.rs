@@ -6,22 +6,7 @@
 
 mod common;
 
-use common::Project;
-
-fn by_name<'a>(reports: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
-    reports
-        .as_array()
-        .expect("array")
-        .iter()
-        .find(|r| r["name"] == name)
-        .unwrap_or_else(|| panic!("no report {name}"))
-}
-
-fn number(report: &serde_json::Value, key: &str) -> f64 {
-    report[key]
-        .as_f64()
-        .unwrap_or_else(|| panic!("{key} in {report}"))
-}
+use common::{Project, by_name, number};
 
 /// A plane's distance field is exact: a `wall` of 0.8 mm across a 10 mm box is a slab of
 /// volume 0.8 × 100, whichever way the plane is tilted and however the cell is scaled.

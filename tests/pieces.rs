@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::Project;
+use common::{Project, by_name};
 
 const BALLS_AND_NETWORK: &str = r#"
 [cells.p]
@@ -49,13 +49,6 @@ solid = "outside"
 resolution = 12
 formats = ["ply"]
 "#;
-
-fn by_name<'a>(reports: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
-    reports
-        .as_array()
-        .and_then(|all| all.iter().find(|r| r["name"] == name))
-        .unwrap_or_else(|| panic!("no report for {name}"))
-}
 
 fn pieces(report: &serde_json::Value) -> (u64, f64) {
     (

@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{Project, sphere_stl};
+use common::{Project, by_name, number, sphere_stl};
 
 /// An IWP shell 0.2 thick over one period at `samples` per axis, and the two level sets
 /// bounding it at 129 samples.
@@ -40,21 +40,6 @@ formats = ["ply"]
         ));
     }
     manifest
-}
-
-fn by_name<'a>(reports: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
-    reports
-        .as_array()
-        .expect("array")
-        .iter()
-        .find(|r| r["name"] == name)
-        .unwrap_or_else(|| panic!("no report {name}"))
-}
-
-fn number(report: &serde_json::Value, key: &str) -> f64 {
-    report[key]
-        .as_f64()
-        .unwrap_or_else(|| panic!("{key} in {report}"))
 }
 
 /// The case: at 33 samples the sampled `|f| − w/2` kept a volume fraction of 0.0007

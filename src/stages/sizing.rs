@@ -232,20 +232,7 @@ pub fn sized_field(
             level,
             graded: amount,
         } => {
-            let by = if shell { "wall" } else { "grow" };
-            let target = match solid {
-                Solid::Shell { thickness } => thickness,
-                Solid::Inside { offset } => offset,
-                Solid::Outside { offset } => -offset,
-                Solid::EccentricShell { thickness, .. } => thickness,
-            };
-            let summary = SizingSummary {
-                by: by.into(),
-                target: amount.is_none().then_some(target),
-                solved_level: None,
-                solved_wall: None,
-                iterations: None,
-            };
+            let summary = length_summary(&solid, amount.is_none());
             let h = distance(field, *level);
             let Some(amount) = amount else {
                 return Ok(SizedField {
@@ -288,47 +275,12 @@ pub fn sized_field(
             let table = table
                 .ok_or("a volume fraction needs the cell's table")?
                 .clone();
-            // The quantity tabled: f (a fraction below it is inside) or |h| (within ±half wall).
-            let fraction_of = move |phi: f64| match solid {
-                Solid::Outside { .. } => 1.0 - phi,
-                _ => phi,
-            };
             match target {
                 Target::Uniform(phi) => {
-                    let solved = table
-                        .level_for(fraction_of(*phi))
-                        .map_err(|e| e.to_string())?;
-                    let mut summary = SizingSummary {
-                        by: "volume_fraction".into(),
-                        target: Some(*phi),
-                        solved_level: None,
-                        solved_wall: None,
-                        iterations: Some(solved.iterations),
-                    };
-                    let (field, solid) = match solid {
-                        Solid::Inside { .. } => {
-                            summary.solved_level = Some(solved.level);
-                            (
-                                field,
-                                Solid::Inside {
-                                    offset: solved.level,
-                                },
-                            )
-                        }
-                        Solid::Outside { .. } => {
-                            summary.solved_level = Some(solved.level);
-                            (
-                                field,
-                                Solid::Outside {
-                                    offset: solved.level,
-                                },
-                            )
-                        }
-                        _ => {
-                            let wall = 2.0 * solved.level;
-                            summary.solved_wall = Some(wall);
-                            (distance(field, *level), Solid::Shell { thickness: wall })
-                        }
+                    let (solid, summary) = solve_uniform(&table, solid, *phi)?;
+                    let field = match shell {
+                        true => distance(field, *level),
+                        false => field,
                     };
                     Ok(SizedField {
                         field,
@@ -345,14 +297,8 @@ pub fn sized_field(
                         "volume fraction",
                         "between 0 and 1 (the reachable range is 0 < volume_fraction < 1)",
                     )?;
-                    let lookup = move |phi: f64| table.level_at(fraction_of(phi));
-                    let summary = SizingSummary {
-                        by: "volume_fraction".into(),
-                        target: None,
-                        solved_level: None,
-                        solved_wall: None,
-                        iterations: None,
-                    };
+                    let lookup = move |phi: f64| table.level_at(tabled_fraction(&solid, phi));
+                    let summary = graded_fraction_summary();
                     let (field, solid) = match solid {
                         Solid::Inside { .. } | Solid::Outside { .. } => (
                             graded(field, mapped(values, lookup), Spatial::Constant(1.0)),
@@ -379,6 +325,87 @@ pub fn sized_field(
             }
         }
     }
+}
+
+/// The length a `wall` or `grow` asks for, from the solid it was parsed into (an outside
+/// solid's offset is minus its growth: see `manifest::Sizing`).
+pub fn asked_length(solid: &Solid) -> f64 {
+    match *solid {
+        Solid::Shell { thickness } | Solid::EccentricShell { thickness, .. } => thickness,
+        Solid::Inside { offset } => offset,
+        Solid::Outside { offset } => -offset,
+    }
+}
+
+/// The summary of a `wall` (shells) or `grow`: its value when uniform.
+pub fn length_summary(solid: &Solid, uniform: bool) -> SizingSummary {
+    SizingSummary {
+        by: if solid.band().is_some() {
+            "wall"
+        } else {
+            "grow"
+        }
+        .into(),
+        target: uniform.then(|| asked_length(solid)),
+        solved_level: None,
+        solved_wall: None,
+        iterations: None,
+    }
+}
+
+/// The summary of a graded volume fraction (nothing solved once: a level per point).
+pub fn graded_fraction_summary() -> SizingSummary {
+    SizingSummary {
+        by: "volume_fraction".into(),
+        target: None,
+        solved_level: None,
+        solved_wall: None,
+        iterations: None,
+    }
+}
+
+/// The fraction of the tabled quantity below the solved value for a target `phi`: the field
+/// for inside (below its level) and outside (above it: `1 − φ` below), `|h|` for shells.
+pub fn tabled_fraction(solid: &Solid, phi: f64) -> f64 {
+    match solid {
+        Solid::Outside { .. } => 1.0 - phi,
+        _ => phi,
+    }
+}
+
+/// A uniform volume fraction solved on the table: the solid at the level found (a shell's
+/// wall is twice the `|h|` found, in the table's units) and the summary saying so.
+pub fn solve_uniform(
+    table: &LevelTable,
+    solid: Solid,
+    phi: f64,
+) -> Result<(Solid, SizingSummary), String> {
+    let solved = table
+        .level_for(tabled_fraction(&solid, phi))
+        .map_err(|e| e.to_string())?;
+    let mut summary = SizingSummary {
+        by: "volume_fraction".into(),
+        target: Some(phi),
+        solved_level: None,
+        solved_wall: None,
+        iterations: Some(solved.iterations),
+    };
+    let solid = match solid {
+        Solid::Inside { .. } => Solid::Inside {
+            offset: solved.level,
+        },
+        Solid::Outside { .. } => Solid::Outside {
+            offset: solved.level,
+        },
+        _ => Solid::Shell {
+            thickness: 2.0 * solved.level,
+        },
+    };
+    match solid {
+        Solid::Shell { thickness } => summary.solved_wall = Some(thickness),
+        _ => summary.solved_level = Some(solved.level),
+    }
+    Ok((solid, summary))
 }
 
 /// A graded value's expression, compiled (node data only reaches tiled outputs, which

@@ -46,7 +46,10 @@ use std::sync::Arc;
 use super::artifact::{MeshArtifact, MeshSummary, Planar, ShellSummary, TilingSummary};
 use super::chunked::ChunkedHead;
 use super::contour::sizing_param;
-use super::sizing::{DensityStage, Over, SizingSummary, table_of};
+use super::sizing::{
+    DensityStage, Over, SizingSummary, asked_length, graded_fraction_summary, length_summary,
+    solve_uniform, table_of, tabled_fraction,
+};
 use super::symmetric::{FittedPayload, group_of};
 use crate::build::StageProgress;
 use crate::cache::{KeyBuilder, Param};
@@ -605,96 +608,51 @@ impl TileStage {
             Sizing::Field => sized.cells = boxed(fitted, None),
             Sizing::Length { level, graded } => {
                 sized.cells = boxed(fitted, Some(*level));
+                sized.summary = Some(length_summary(&self.solid, graded.is_none()));
                 let (scales, uniform) = node_scales(scaffold);
-                let asked = match self.solid {
-                    Solid::Shell { thickness } | Solid::EccentricShell { thickness, .. } => {
-                        thickness
-                    }
-                    Solid::Inside { offset } => offset,
-                    Solid::Outside { offset } => -offset,
-                };
-                sized.summary = Some(SizingSummary {
-                    by: if shell { "wall" } else { "grow" }.into(),
-                    target: graded.is_none().then_some(asked),
-                    solved_level: None,
-                    solved_wall: None,
-                    iterations: None,
-                });
+                if let (Some(scale), None) = (uniform, graded) {
+                    // One scale everywhere: the solid's own numbers, in reference units.
+                    sized.solid = match self.solid {
+                        Solid::Inside { offset } => Solid::Inside {
+                            offset: offset / scale,
+                        },
+                        Solid::Outside { offset } => Solid::Outside {
+                            offset: offset / scale,
+                        },
+                        solid => Solid::Shell {
+                            thickness: asked_length(&solid) / scale,
+                        },
+                    };
+                    return Ok(sized);
+                }
                 let what = if shell { "wall" } else { "grow" };
                 let model = match graded {
                     Some(value) => self.nodal_values(scaffold, what, value)?,
-                    None => vec![asked; scaffold.nodes.len()],
+                    None => vec![asked_length(&self.solid); scaffold.nodes.len()],
                 };
                 if shell {
                     self.positive(scaffold, what, &model)?;
                 }
-                match (uniform, graded) {
-                    (Some(scale), None) => {
-                        sized.solid = match self.solid {
-                            Solid::Inside { offset } => Solid::Inside {
-                                offset: offset / scale,
-                            },
-                            Solid::Outside { offset } => Solid::Outside {
-                                offset: offset / scale,
-                            },
-                            _ => Solid::Shell {
-                                thickness: asked / scale,
-                            },
-                        }
-                    }
-                    _ => {
-                        let reference: Vec<f64> =
-                            model.iter().zip(&scales).map(|(v, s)| v / s).collect();
-                        match self.solid {
-                            Solid::Inside { .. } => sized.offset = Some(reference),
-                            Solid::Outside { .. } => {
-                                sized.offset = Some(reference.iter().map(|v| -v).collect())
-                            }
-                            _ => sized.thickness = Some(reference),
-                        }
-                    }
+                let reference = model.iter().zip(&scales).map(|(v, s)| v / s);
+                match self.solid {
+                    Solid::Inside { .. } => sized.offset = Some(reference.collect()),
+                    Solid::Outside { .. } => sized.offset = Some(reference.map(|v| -v).collect()),
+                    _ => sized.thickness = Some(reference.collect()),
                 }
             }
             Sizing::VolumeFraction { level, target } => {
                 let table = table.ok_or("a volume fraction needs the cell's table")?;
                 sized.cells = boxed(fitted, shell.then_some(*level));
-                // Inside: the fraction below the level; outside: above it; shells: |h| below
-                // the half wall.
-                let fraction = |phi: f64| match self.solid {
-                    Solid::Outside { .. } => 1.0 - phi,
-                    _ => phi,
-                };
-                let mut summary = SizingSummary {
-                    by: "volume_fraction".into(),
-                    target: None,
-                    solved_level: None,
-                    solved_wall: None,
-                    iterations: None,
-                };
                 match target {
                     Target::Uniform(phi) => {
-                        let solved = table.level_for(fraction(*phi)).map_err(|e| e.to_string())?;
-                        summary.target = Some(*phi);
-                        summary.iterations = Some(solved.iterations);
-                        sized.solid = match self.solid {
-                            Solid::Inside { .. } => Solid::Inside {
-                                offset: solved.level,
-                            },
-                            Solid::Outside { .. } => Solid::Outside {
-                                offset: solved.level,
-                            },
-                            _ => Solid::Shell {
-                                thickness: 2.0 * solved.level,
-                            },
-                        };
-                        if shell {
+                        let (solid, mut summary) = solve_uniform(table, self.solid, *phi)?;
+                        if let Some(wall) = summary.solved_wall.as_mut() {
                             // In model units: the reference wall times the mean element scale.
                             let (scales, _) = node_scales(scaffold);
-                            let mean = scales.iter().sum::<f64>() / scales.len().max(1) as f64;
-                            summary.solved_wall = Some(2.0 * solved.level * mean);
-                        } else {
-                            summary.solved_level = Some(solved.level);
+                            *wall *= scales.iter().sum::<f64>() / scales.len().max(1) as f64;
                         }
+                        sized.solid = solid;
+                        sized.summary = Some(summary);
                     }
                     Target::Graded(value) => {
                         let phis = self.nodal_values(scaffold, "volume_fraction", value)?;
@@ -709,16 +667,18 @@ impl TileStage {
                                 self.source()
                             ));
                         }
-                        let levels = phis.iter().map(|&p| table.level_at(fraction(p)));
+                        let levels = phis
+                            .iter()
+                            .map(|&p| table.level_at(tabled_fraction(&self.solid, p)));
                         match self.solid {
                             Solid::Inside { .. } | Solid::Outside { .. } => {
                                 sized.offset = Some(levels.collect())
                             }
                             _ => sized.thickness = Some(levels.map(|h| 2.0 * h).collect()),
                         }
+                        sized.summary = Some(graded_fraction_summary());
                     }
                 }
-                sized.summary = Some(summary);
             }
         }
         Ok(sized)

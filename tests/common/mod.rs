@@ -54,6 +54,23 @@ impl Project {
     }
 }
 
+/// The report of output `name` in a list of reports; panics when there is none.
+pub fn by_name<'a>(reports: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
+    reports
+        .as_array()
+        .expect("array")
+        .iter()
+        .find(|r| r["name"] == name)
+        .unwrap_or_else(|| panic!("no report {name}"))
+}
+
+/// A report's number at `key`; panics when it is not one.
+pub fn number(report: &serde_json::Value, key: &str) -> f64 {
+    report[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{key} in {report}"))
+}
+
 /// Names of the stages that ran (were not cached) in a list of reports.
 pub fn ran(reports: &serde_json::Value) -> Vec<String> {
     let mut names: Vec<String> = reports

@@ -37,6 +37,8 @@
 //! and [`IslandKeeper`] (`stream.rs`): two or three passes over the chunks, the same result.
 
 use crate::mesh::Mesh;
+use crate::validate::find;
+use crate::vec3::{cross, dot, norm, sub};
 
 /// What to keep of a mesh's pieces.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -479,36 +481,6 @@ fn side(p: [f64; 3], u: [f64; 3], v: [f64; 3]) -> (f64, bool) {
     } else {
         (-value, !positive)
     }
-}
-
-#[inline]
-fn find(parent: &mut [u32], mut x: u32) -> u32 {
-    while parent[x as usize] != x {
-        let grandparent = parent[parent[x as usize] as usize];
-        parent[x as usize] = grandparent;
-        x = grandparent;
-    }
-    x
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
 }
 
 mod stream;

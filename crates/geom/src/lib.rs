@@ -28,7 +28,10 @@ pub mod scaffold;
 pub mod sdf;
 pub mod spelling;
 pub mod symmetric;
+#[cfg(test)]
+mod test_meshes;
 pub mod tile;
 pub mod tpms;
 pub mod validate;
+pub(crate) mod vec3;
 pub mod within;

@@ -14,6 +14,7 @@
 //!   is not added to its piece (which piece holds it is not known here).
 
 use crate::mesh::Mesh;
+use crate::validate::find;
 
 /// One connected surface.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -136,14 +137,4 @@ pub fn solid_genera(mesh: &Mesh) -> Topology {
             .collect(),
         cavities: all.iter().filter(|s| s.volume < 0.0).count(),
     }
-}
-
-/// The root of `x`'s set, halving paths on the way.
-fn find(parent: &mut [u32], mut x: u32) -> u32 {
-    while parent[x as usize] != x {
-        let up = parent[parent[x as usize] as usize];
-        parent[x as usize] = up;
-        x = up;
-    }
-    x
 }

@@ -13,6 +13,7 @@
 
 use super::voxel::{Grid, triangle};
 use crate::mesh::Mesh;
+use crate::vec3::{dot, norm, sub};
 
 /// The side of a bin, in voxels.
 pub const BIN_VOXELS: f64 = 1.0;
@@ -308,15 +309,7 @@ fn plane(t: &[[f64; 3]; 3]) -> ([f64; 3], f64) {
 }
 
 pub(crate) fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
-    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    norm(sub(a, b))
 }
 
 fn along(a: [f64; 3], d: [f64; 3], t: f64) -> [f64; 3] {

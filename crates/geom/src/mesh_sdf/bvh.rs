@@ -24,7 +24,7 @@
 //! whatever the thread count.
 
 use super::prepare::Tri;
-use super::vec3::{V3, add, cross, dot, max, min, norm, scale, sub};
+use crate::vec3::{V3, add, cross, dot, max, min, norm, scale, sub};
 use rayon::prelude::*;
 
 /// Most triangles in a leaf. Measured on the benchmark torus: 2 beats 1 (more nodes to

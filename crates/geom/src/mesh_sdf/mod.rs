@@ -59,7 +59,7 @@ mod nearest;
 mod periodic;
 mod prepare;
 mod sampler;
-mod vec3;
+
 mod winding;
 
 use crate::field::{Grid, PlaneSampler, ScalarField};

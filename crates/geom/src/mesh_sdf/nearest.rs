@@ -28,7 +28,7 @@
 use super::bvh::{Bvh, MAX_DEPTH, Node};
 use super::lanes::F4;
 use super::prepare::Tri;
-use super::vec3::{V3, cross, dot, sub};
+use crate::vec3::{V3, cross, dot, sub};
 
 /// Squared distance from `p` to segment `a + t·e`, `t ∈ [0, 1]`, given `ap = p − a`.
 #[inline(always)]

@@ -52,10 +52,10 @@
 use super::nearest::{self, LANES, any_box_overlap, triangle_dist2};
 use super::prepare::Tri;
 use super::sampler::{SIGN_BETA, SIGN_MARGIN};
-use super::vec3::{V3, add, cross, dot, max, min, norm, scale, sub};
 use super::{MeshSdf, MeshSdfError, Mode, SdfOptions, SurfaceReport, bvh, winding};
 use crate::field::ScalarField;
 use crate::mesh_read::TriangleSoup;
+use crate::vec3::{V3, add, cross, dot, max, min, norm, scale, sub};
 use rayon::prelude::*;
 
 /// Largest extent of the mesh along an axis, in periods.

@@ -22,8 +22,8 @@
 //! Invariant: the output depends only on the soup (sorts are total orders with the index as a
 //! tie-break), not on thread count.
 
-use super::vec3::{V3, add, cross, dot, max, min, norm, scale, sub};
 use crate::mesh_read::TriangleSoup;
+use crate::vec3::{V3, add, cross, dot, max, min, norm, scale, sub};
 use rayon::prelude::*;
 
 pub(super) type Tri = [V3; 3];

@@ -16,9 +16,9 @@
 //! side depends only on the row's own points and distances.
 
 use super::nearest::LANES;
-use super::vec3::{V3, add, dot, max, min, sub};
 use super::{MeshSdf, Mode, nearest, winding};
 use crate::field::{Grid, PlaneSampler};
+use crate::vec3::{V3, add, dot, max, min, sub};
 use rayon::prelude::*;
 use std::ops::Range;
 

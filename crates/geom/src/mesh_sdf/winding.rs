@@ -26,7 +26,7 @@
 
 use super::bvh::{Aabb, Bvh, MAX_DEPTH};
 use super::prepare::Tri;
-use super::vec3::{V3, add, cross, dot, max, norm, scale, sub};
+use crate::vec3::{V3, add, cross, dot, max, norm, scale, sub};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 

@@ -60,6 +60,7 @@
 //! field except that duplicate positions are only matched between vertices alive together.
 
 use crate::mesh::Mesh;
+use crate::vec3::{cross, dot, sub};
 use rayon::prelude::*;
 
 mod closed_fan;
@@ -440,25 +441,6 @@ fn triangle_chunk<I: Index>(
     sums
 }
 
-#[inline]
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-#[inline]
-fn cross(u: [f64; 3], v: [f64; 3]) -> [f64; 3] {
-    [
-        u[1] * v[2] - u[2] * v[1],
-        u[2] * v[0] - u[0] * v[2],
-        u[0] * v[1] - u[1] * v[0],
-    ]
-}
-
-#[inline]
-fn dot(u: [f64; 3], v: [f64; 3]) -> f64 {
-    u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
-}
-
 // ---------------------------------------------------------------------------------------------
 // Vertex → link adjacency, built by counting sort.
 
@@ -695,8 +677,10 @@ fn general_fan(fan: &[u64], vertex: u32, scratch: &mut FanScratch, sums: &mut Fa
     }
 }
 
+/// The root of `x`'s set in a union-find, halving paths on the way (shared by the piece
+/// counts, the island filter and the genus).
 #[inline]
-fn find(parent: &mut [u32], mut x: u32) -> u32 {
+pub(crate) fn find(parent: &mut [u32], mut x: u32) -> u32 {
     while parent[x as usize] != x {
         // Path halving keeps later finds short.
         let grandparent = parent[parent[x as usize] as usize];

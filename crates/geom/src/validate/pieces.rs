@@ -26,6 +26,7 @@ use std::collections::HashMap;
 
 use super::find;
 use crate::mesh::{Mesh, MeshChunk};
+use crate::vec3::{cross, dot, norm, sub};
 
 /// One piece's measures.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -262,52 +263,13 @@ impl PieceCounter {
     }
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// An axis-aligned box's 12 triangles, outward, with vertex ids from `base`.
+    /// An outward axis-aligned box with vertex ids from `base`.
     fn cube(min: [f32; 3], size: f32, base: u32) -> Mesh {
-        let vertices: Vec<[f32; 3]> = (0..8)
-            .map(|c| [0, 1, 2].map(|a| min[a] + if c >> a & 1 == 1 { size } else { 0.0 }))
-            .collect();
-        let faces: [[u32; 4]; 6] = [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ];
-        let triangles = faces
-            .iter()
-            .flat_map(|f| [[f[0], f[1], f[2]], [f[0], f[2], f[3]]])
-            .map(|t| t.map(|v| v + base))
-            .collect();
-        Mesh {
-            vertices,
-            triangles,
-        }
+        crate::test_meshes::cube(min, size, base, false)
     }
 
     /// Cubes of sides 1, 2, 3, …, apart, as one mesh.
