@@ -7,6 +7,7 @@ use serde::Serialize;
 
 use crate::build::OutputResult;
 use crate::manifest::Manifest;
+use crate::stages::measure::{Measures, Spread};
 use crate::stages::{Removed, ShellSummary, TilingSummary};
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -66,6 +67,20 @@ pub struct Report {
     /// volume fraction, the level or wall solved and the bisection steps it took.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sizing: Option<crate::stages::artifact::SizingSummary>,
+    /// Local thickness of the solid (the diameter of the largest ball inside the solid that
+    /// holds the point) over its volume, `{min, p05, median, max}` in model units, with the
+    /// voxel it was measured on; absent with `[build] report = "basic"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wall_thickness: Option<Spread>,
+    /// Local thickness of the void within the output's box (blocks and SDF boxes only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pore_size: Option<Spread>,
+    /// The genus (handles) of each solid piece, largest piece first (at most
+    /// [`crate::stages::measure::GENUS_LISTED`]); `null` for a surface that is not closed.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub genus: Vec<Option<i64>>,
+    /// Closed voids sealed inside the solid.
+    pub cavities: u64,
     /// What the build found worth saying about this output: more than one piece, a wall
     /// thinner than [`ShellSummary::THIN_WALL`] sample spacings.
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -103,6 +118,7 @@ impl Report {
             None => s.volume / domain_volume,
         };
         let sizing = result.written.sizing.clone();
+        let measures = result.written.measures.as_ref();
         let within = manifest
             .outputs
             .get(&result.name)
@@ -143,7 +159,12 @@ impl Report {
                         .as_ref()
                         .and_then(|s| fraction_warning(s, volume_fraction, within)),
                 )
+                .chain(measures.and_then(measure_warning))
                 .collect(),
+            wall_thickness: measures.and_then(|m| m.wall_thickness),
+            pore_size: measures.and_then(|m| m.pore_size),
+            genus: measures.map(|m| m.genus.clone()).unwrap_or_default(),
+            cavities: measures.map_or(0, |m| m.cavities),
             sizing,
             bbox: Bbox {
                 min: s.bbox_min,
@@ -213,8 +234,14 @@ impl Report {
             Some(r) => format!("{validity}, {}", removed_text(r)),
             None => validity,
         };
+        let measured: String = [("wall", self.wall_thickness), ("pore", self.pore_size)]
+            .iter()
+            .filter_map(|(what, spread)| {
+                spread.map(|s| format!(", {what} {:.3} {}", s.median, self.units))
+            })
+            .collect();
         format!(
-            "{}: {} triangles, {} vertices{tiled}, {validity}, volume fraction {:.4} -> {} ({:.2} s, {cached} of {} stages cached)",
+            "{}: {} triangles, {} vertices{tiled}, {validity}, volume fraction {:.4}{measured} -> {} ({:.2} s, {cached} of {} stages cached)",
             self.name,
             self.triangles,
             self.vertices,
@@ -250,6 +277,14 @@ fn fraction_warning(
 pub const FRACTION_TOLERANCE: f64 = 0.01;
 
 /// Area over volume for a solid of positive, finite volume.
+/// Local thickness that was asked for and not measured. (No warning is drawn from the
+/// figures themselves: their low percentiles hold the voxels at the part's cut edges, where
+/// local thickness goes to zero by definition.)
+fn measure_warning(m: &Measures) -> Option<String> {
+    let why = m.not_measured.as_ref()?;
+    Some(format!("wall thickness and pore size not measured: {why}"))
+}
+
 fn specific_surface(area: f64, volume: f64, planar: bool) -> Option<f64> {
     (!planar && volume > 0.0 && volume.is_finite() && area.is_finite()).then(|| area / volume)
 }

@@ -94,7 +94,24 @@ fn summarize(report: &serde_json::Value) -> String {
         vec3(&report["bbox"]["min"]),
         vec3(&report["bbox"]["max"]),
     ) + &tiling(report)
+        + &measures(report)
         + &warnings(report)
+}
+
+/// The measured topology and local thickness (medians, four significant digits).
+fn measures(report: &serde_json::Value) -> String {
+    let spread = |key: &str| match report[key]["median"].as_f64() {
+        Some(m) => format!(
+            "  {key} median {m:.4e} voxel {:.4e}\n",
+            report[key]["voxel"].as_f64().expect("voxel")
+        ),
+        None => String::new(),
+    };
+    format!(
+        "  genus {} cavities {}\n",
+        report["genus"], report["cavities"]
+    ) + &spread("wall_thickness")
+        + &spread("pore_size")
 }
 
 /// A shell's measured wall, and a line per warning of the report (loose pieces, a thin wall).

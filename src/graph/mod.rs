@@ -207,7 +207,11 @@ impl Graph {
             }
             let contour = graph.push(format!("contour:{name}"), stage, inputs);
             let mesh = graph.islands(name, &output.islands, contour);
-            let write = graph.push(format!("write:{name}"), Stage::write(output), vec![mesh]);
+            let write = graph.push(
+                format!("write:{name}"),
+                Stage::write(output, manifest.report),
+                vec![mesh],
+            );
             graph.outputs.insert(name.clone(), write);
         }
         // An SDF output: `sdf` reading a `file:` node per mesh of its program, then `write`.
@@ -220,6 +224,9 @@ impl Graph {
                 formats: output.formats.clone(),
                 encoding: output.encoding,
                 stem: output.stem.clone(),
+                report: manifest.report,
+                // Given bounds here; else the box the program is contoured over.
+                pore_box: output.bounds,
             };
             let mesh = graph.islands(name, &output.islands, solid);
             let write = graph.push(format!("write:{name}"), Stage::Write(write), vec![mesh]);
@@ -246,6 +253,8 @@ impl Graph {
                 formats: output.formats.clone(),
                 encoding: output.encoding,
                 stem: output.stem.clone(),
+                report: manifest.report,
+                pore_box: None,
             };
             let mesh = graph.islands(name, &output.islands, tiled);
             let write = graph.push(format!("write:{name}"), Stage::Write(write), vec![mesh]);

@@ -22,6 +22,8 @@ pub struct Manifest {
     pub out_dir: PathBuf,
     /// What the model's lengths are in (`[build] units`, default `"mm"`), echoed in reports.
     pub units: String,
+    /// How much each report measures (`[build] report`, default `"full"`).
+    pub report: crate::stages::measure::ReportLevel,
     pub cells: BTreeMap<String, Cell>,
     pub outputs: BTreeMap<String, Output>,
     /// Outputs whose solid is an SDF program (`sdf = "…"`); their names differ from those of

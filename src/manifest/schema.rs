@@ -25,6 +25,7 @@ use super::expression;
 use super::model::{Cell, MAX_SAMPLES_PER_AXIS, Manifest, Name, Output, Sizing, voxel_samples};
 use super::source::Report;
 use crate::diagnostics::Diagnostic;
+use crate::stages::measure::ReportLevel;
 
 #[path = "crystals.rs"]
 mod crystals;
@@ -47,7 +48,7 @@ type Key<'i> = Spanned<DeString<'i>>;
 type Value<'i> = Spanned<DeValue<'i>>;
 
 const TOP_KEYS: [&str; 4] = ["build", "cells", "scaffolds", "outputs"];
-const BUILD_KEYS: [&str; 2] = ["out_dir", "units"];
+const BUILD_KEYS: [&str; 3] = ["out_dir", "units", "report"];
 /// The length units `[build] units` accepts: what the model's numbers mean (reports echo it).
 pub(crate) const UNITS: [&str; 5] = ["mm", "cm", "m", "um", "in"];
 const CELL_KEYS: [&str; 18] = [
@@ -105,8 +106,7 @@ pub(crate) const MAX_SAMPLES: i64 = MAX_SAMPLES_PER_AXIS as i64;
 pub(crate) fn expects_string(path: &[&str]) -> bool {
     matches!(
         path,
-        ["build", "out_dir"]
-            | ["build", "units"]
+        ["build", "out_dir" | "units" | "report"]
             | [
                 "cells",
                 _,
@@ -159,12 +159,13 @@ pub(crate) fn validate(
     };
     let mut out_dir = Some("out".to_string());
     let mut units = Some("mm".to_string());
+    let mut report_level = Some(ReportLevel::default());
     let mut cells_table = None;
     let mut scaffolds_table = None;
     let mut outputs_table = None;
     for (key, value) in root {
         match key.get_ref().as_ref() {
-            "build" => (out_dir, units) = checker.build(value),
+            "build" => (out_dir, units, report_level) = checker.build(value),
             "cells" => {
                 cells_table = checker.table("cells", value, "define cells as `[cells.NAME]` tables")
             }
@@ -252,6 +253,7 @@ pub(crate) fn validate(
         path: manifest_path.to_path_buf(),
         out_dir,
         units: units?,
+        report: report_level?,
         root: dir,
         inputs,
         cells,
@@ -295,17 +297,46 @@ struct Checker<'r, 's, 'a> {
 impl Checker<'_, '_, '_> {
     // ---- sections ------------------------------------------------------------------------
 
-    /// `[build]`: the output directory and the length units (`None` each where invalid).
-    fn build(&mut self, value: &Value<'_>) -> (Option<String>, Option<String>) {
+    /// `[build]`: the output directory, the length units and the report level (`None` each
+    /// where invalid).
+    fn build(
+        &mut self,
+        value: &Value<'_>,
+    ) -> (Option<String>, Option<String>, Option<ReportLevel>) {
         let Some(table) = self.table("build", value, "write it as a `[build]` table") else {
-            return (None, None);
+            return (None, None, None);
         };
         let fields = self.fields(table, &BUILD_KEYS, "in `[build]`");
         let units = match fields.get("units") {
             None => Some("mm".to_string()),
             Some((_, value)) => self.units(value),
         };
-        (self.out_dir(fields.get("out_dir").map(|(_, v)| *v)), units)
+        let report = match fields.get("report") {
+            None => Some(ReportLevel::default()),
+            Some((_, value)) => self.report_level(value),
+        };
+        (
+            self.out_dir(fields.get("out_dir").map(|(_, v)| *v)),
+            units,
+            report,
+        )
+    }
+
+    /// `build.report`: one of [`ReportLevel::NAMES`].
+    fn report_level(&mut self, value: &Value<'_>) -> Option<ReportLevel> {
+        let name = self.string("build.report", value)?;
+        if let Some(level) = ReportLevel::parse(name) {
+            return Some(level);
+        }
+        self.error(
+            value.span(),
+            &format!("unknown report level `{name}` in `build.report`"),
+            "unknown level",
+            Some(
+                "use `\"full\"` (wall thickness and pore size too) or `\"basic\"` (topology only)",
+            ),
+        );
+        None
     }
 
     /// `build.units`: one of [`UNITS`].

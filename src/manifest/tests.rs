@@ -679,7 +679,7 @@ error: unknown key `out` in `[build]`
 6 | out = 1
   | ^^^ unknown key
   |
-  = help: expected one of `out_dir`, `units`
+  = help: expected one of `out_dir`, `units`, `report`
 
 error: could not load `lattice.toml` due to 3 previous errors
 ",
@@ -935,6 +935,7 @@ fn defaults_are_filled_in() {
         root: PathBuf::from("parts"),
         out_dir: PathBuf::from("parts/out"),
         units: "mm".into(),
+        report: crate::stages::measure::ReportLevel::Full,
         cells: BTreeMap::from([(
             "gyroid".to_string(),
             Cell {

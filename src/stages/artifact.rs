@@ -363,4 +363,7 @@ pub struct WrittenOutput {
     /// See [`MeshArtifact::sizing`].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sizing: Option<SizingSummary>,
+    /// What was measured of the mesh (`None` for a planar region).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub measures: Option<super::measure::Measures>,
 }

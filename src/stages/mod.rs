@@ -31,6 +31,7 @@ pub mod chunked;
 pub mod contour;
 pub mod crystal;
 pub mod islands;
+pub mod measure;
 pub mod mesh;
 pub mod sdf;
 pub mod sizing;
@@ -75,8 +76,8 @@ impl Stage {
         Stage::Contour(contour::ContourStage::new(output, fitted))
     }
 
-    pub fn write(output: &Output) -> Stage {
-        Stage::Write(write::WriteStage::new(output))
+    pub fn write(output: &Output, report: measure::ReportLevel) -> Stage {
+        Stage::Write(write::WriteStage::new(output, report))
     }
 
     pub fn kind(&self) -> &'static str {

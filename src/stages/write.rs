@@ -15,10 +15,12 @@ use latticebuild_geom::mesh_io::{self, ChunkSource, Encoding, Format};
 
 use super::artifact::{MeshArtifact, WrittenFile, WrittenOutput};
 use super::chunked::{ChunkedHead, is_corrupt};
+use super::measure::{self, Measures, ReportLevel};
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::Output;
 
-pub const VERSION: u32 = 1;
+/// 2: the payload holds the output's [`Measures`].
+pub const VERSION: u32 = 2;
 
 /// Where the write stage's files go. The CLI's implementation writes each file to a temporary
 /// name and renames it into place, so a file is whole or absent.
@@ -76,14 +78,22 @@ pub struct WriteStage {
     pub formats: Vec<Format>,
     pub encoding: Encoding,
     pub stem: String,
+    /// How much of the mesh to measure ([`measure`]), while the files are written.
+    pub report: ReportLevel,
+    /// The box whose void is the output's pores: a block's domain; `None` where the void
+    /// round the part is not a pore (a tiled part, a fill within a mesh, an element).
+    pub pore_box: Option<[[f64; 3]; 2]>,
 }
 
 impl WriteStage {
-    pub fn new(output: &Output) -> WriteStage {
+    pub fn new(output: &Output, report: ReportLevel) -> WriteStage {
+        let boxed = !output.over_element && !output.planar_domain && output.within.is_none();
         WriteStage {
             formats: output.formats.clone(),
             encoding: output.encoding,
             stem: output.stem.clone(),
+            report,
+            pore_box: boxed.then_some([output.domain_min, output.domain_max]),
         }
     }
 
@@ -96,6 +106,8 @@ impl WriteStage {
         key.param("formats", Param::List(formats))
             .param("ascii", self.encoding == Encoding::Ascii)
             .param("path", self.stem.as_str())
+            .param("report", self.report.name())
+            .param("pores", format!("{:?}", self.pore_box).as_str())
     }
 
     /// The relative path of the file for `format`.
@@ -103,28 +115,14 @@ impl WriteStage {
         format!("{}.{}", self.stem, format.name())
     }
 
-    /// Writes every format (in parallel: each writer streams on its own); a format in
-    /// `prewritten` is only put in place.
-    pub fn run(
+    /// Writes (or puts in place) each format's file, in parallel.
+    fn write_files(
         &self,
         input: MeshInput,
         sink: &dyn OutputSink,
-        prewritten: Vec<Prewritten>,
-    ) -> Result<WrittenOutput, WriteError> {
-        let mut prewritten = prewritten;
-        let jobs: Vec<(Format, Option<Box<dyn PendingFile>>)> = self
-            .formats
-            .iter()
-            .map(|&format| {
-                let ready = prewritten
-                    .iter()
-                    .position(|p| p.format == format)
-                    .map(|i| prewritten.swap_remove(i).file);
-                (format, ready)
-            })
-            .collect();
-        let files = jobs
-            .into_par_iter()
+        jobs: Vec<(Format, Option<Box<dyn PendingFile>>)>,
+    ) -> Result<Vec<WrittenFile>, WriteError> {
+        jobs.into_par_iter()
             .map(|(format, ready)| {
                 let path = self.path(format);
                 let written = match ready {
@@ -152,7 +150,51 @@ impl WriteStage {
                     modified_ns,
                 })
             })
-            .collect::<Result<Vec<_>, WriteError>>()?;
+            .collect()
+    }
+
+    /// Writes every format (in parallel: each writer streams on its own); a format in
+    /// `prewritten` is only put in place.
+    pub fn run(
+        &self,
+        input: MeshInput,
+        sink: &dyn OutputSink,
+        prewritten: Vec<Prewritten>,
+    ) -> Result<WrittenOutput, WriteError> {
+        let mut prewritten = prewritten;
+        let jobs: Vec<(Format, Option<Box<dyn PendingFile>>)> = self
+            .formats
+            .iter()
+            .map(|&format| {
+                let ready = prewritten
+                    .iter()
+                    .position(|p| p.format == format)
+                    .map(|i| prewritten.swap_remove(i).file);
+                (format, ready)
+            })
+            .collect();
+        let measure = || -> Result<Option<Measures>, WriteError> {
+            Ok(Some(match input {
+                MeshInput::Whole(artifact) if artifact.planar.is_some() => return Ok(None),
+                MeshInput::Whole(artifact) => {
+                    // An SDF output's box is found when it is contoured.
+                    let pores = self.pore_box.or(artifact.domain);
+                    measure::measure(&artifact.mesh, self.report, pores)
+                }
+                MeshInput::Chunked { chunks, .. } => {
+                    measure::measure_chunked(chunks, self.report, None).map_err(|e| {
+                        if is_corrupt(&e) {
+                            WriteError::CorruptInput(e.to_string())
+                        } else {
+                            WriteError::Failed(format!("cannot measure the mesh: {e}"))
+                        }
+                    })?
+                }
+            }))
+        };
+        let (files, measures) = rayon::join(|| self.write_files(input, sink, jobs), measure);
+        let (files, measures) = (files?, measures?);
+
         let artifact = match input {
             MeshInput::Whole(artifact) => artifact,
             MeshInput::Chunked { head, .. } => {
@@ -164,6 +206,7 @@ impl WriteStage {
                     tiling: head.tiling.clone(),
                     shell: head.shell.clone(),
                     sizing: head.sizing.clone(),
+                    measures,
                 });
             }
         };
@@ -202,6 +245,7 @@ impl WriteStage {
             tiling: artifact.tiling.clone(),
             shell: artifact.shell.clone(),
             sizing: artifact.sizing.clone(),
+            measures,
         })
     }
 }

@@ -228,18 +228,20 @@ fn bench(args: &[String]) -> Result<(), String> {
     let scratch = std::env::temp_dir().join(format!("latticebuild-bench-{}", std::process::id()));
     std::fs::create_dir_all(&scratch).map_err(|e| e.to_string())?;
     println!(
-        "gyroid, domain [-1,1]^3, cell_size 1, solid inside, binary PLY; cold builds (cache cleaned)"
+        "gyroid, domain [-1,1]^3, cell_size 1, solid inside, binary PLY; cold builds (cache cleaned);\n\
+         `seconds` with report = \"basic\" (what the peers do), `full` the same cold build with the\n\
+         full report (wall thickness and pore size measured)"
     );
     println!(
-        "{:>5} {:>10} {:>10} {:>12} | peers ({field} field): seconds, peak MiB, ratio to latticebuild",
-        "N", "seconds", "peak MiB", "triangles"
+        "{:>5} {:>10} {:>10} {:>12} {:>10} {:>10} | peers ({field} field): seconds, peak MiB, ratio to latticebuild",
+        "N", "seconds", "peak MiB", "triangles", "full s", "full MiB"
     );
     for &n in &sizes {
         let manifest = scratch.join(format!("gyroid{n}.toml"));
         std::fs::write(
             &manifest,
             format!(
-                "[cells.g]\ntpms = \"gyroid\"\n\n[outputs.g{n}]\ncell = \"g\"\ndomain = {{ min = [-1, -1, -1], max = [1, 1, 1] }}\ncell_size = 1\nsolid = \"inside\"\nsamples = {n}\nformats = [\"ply\"]\n"
+                "[build]\nreport = \"basic\"\n\n[cells.g]\ntpms = \"gyroid\"\n\n[outputs.g{n}]\ncell = \"g\"\ndomain = {{ min = [-1, -1, -1], max = [1, 1, 1] }}\ncell_size = 1\nsolid = \"inside\"\nsamples = {n}\nformats = [\"ply\"]\n"
             ),
         )
         .map_err(|e| e.to_string())?;
@@ -258,11 +260,27 @@ fn bench(args: &[String]) -> Result<(), String> {
                     .map(|v| v.trim().trim_end_matches(',').to_string())
             })
             .unwrap_or_default();
+        let clean = || {
+            run(Command::new(&bin)
+                .arg("clean")
+                .arg(&manifest)
+                .stderr(std::process::Stdio::null()))
+        };
+        clean()?;
+        let full = timed(
+            Command::new(&bin)
+                .arg("build")
+                .arg(&manifest)
+                .arg("-q")
+                .args(["--set", "build.report=full"]),
+        )?;
         let mut line = format!(
-            "{n:>5} {:>10.3} {:>10.0} {:>12} |",
+            "{n:>5} {:>10.3} {:>10.0} {:>12} {:>10.3} {:>10.0} |",
             ours.seconds,
             ours.peak_kib as f64 / 1024.0,
-            triangles
+            triangles,
+            full.seconds,
+            full.peak_kib as f64 / 1024.0,
         );
         if peers {
             for peer in ["vtk_flyingedges", "pymcubes", "skimage"] {
