@@ -13,6 +13,8 @@
 //!   counted by [`Topology::cavities`], and the genus of a cavity (a buried torus-shaped void)
 //!   is not added to its piece (which piece holds it is not known here).
 
+use rayon::slice::ParallelSliceMut;
+
 use crate::mesh::Mesh;
 use crate::validate::find;
 
@@ -98,7 +100,8 @@ pub fn surfaces(mesh: &Mesh) -> Vec<SurfaceTopology> {
             }
         }
     }
-    edges.sort_unstable();
+    // The sort is most of the time on a large mesh: both threads take it.
+    edges.par_sort_unstable();
     let mut k = 0;
     while k < edges.len() {
         let mut m = k + 1;

@@ -9,6 +9,10 @@
 //!
 //! Method: closest point on a triangle by its Voronoi regions (vertex, edge, face), in `f64`.
 
+use std::sync::atomic::{AtomicU32, Ordering};
+
+use rayon::prelude::*;
+
 use super::voxel::{Grid, triangle};
 use crate::mesh::Mesh;
 use crate::vec3::{cross, dot, norm, sub};
@@ -27,32 +31,23 @@ impl Patch {
     }
 }
 
-/// A mesh's triangles binned over a grid.
-pub struct Surface {
-    corners: Vec<[[f64; 3]; 3]>,
-    /// Per triangle, its unit normal and `n·a`: a point farther from the plane than the best
-    /// distance so far needs no closest-point test.
-    planes: Vec<([f64; 3], f64)>,
+/// A mesh's triangles binned over a grid (by index: the corners are read from the mesh when
+/// a query needs them, so binning a mesh of tens of millions of triangles copies nothing).
+pub struct Surface<'a> {
+    mesh: &'a Mesh,
     origin: [f64; 3],
     side: f64,
     dims: [usize; 3],
-    /// CSR: bin `b`'s triangles are `members[start[b]..start[b + 1]]`.
+    /// CSR: bin `b`'s triangles are `members[start[b]..start[b + 1]]`, in no set order (a
+    /// query breaks ties by triangle index, so its answer does not depend on it).
     start: Vec<u32>,
     members: Vec<u32>,
 }
 
-impl Surface {
-    pub fn new(mesh: &Mesh, grid: &Grid) -> Surface {
-        let (corners, planes): (Vec<_>, Vec<_>) = mesh
-            .triangles
-            .iter()
-            .filter_map(|t| triangle(mesh, t))
-            .map(|c| (c, plane(&c)))
-            .filter(|(_, (n, _))| *n != [0.0; 3])
-            .unzip();
+impl<'a> Surface<'a> {
+    pub fn new(mesh: &'a Mesh, grid: &Grid) -> Surface<'a> {
         let mut surface = Surface {
-            corners,
-            planes,
+            mesh,
             origin: grid.origin,
             side: grid.spacing,
             dims: grid.dims.map(|d| d.max(1)),
@@ -60,25 +55,40 @@ impl Surface {
             members: Vec::new(),
         };
         let bins = surface.dims.iter().product::<usize>();
-        let mut count = vec![0u32; bins + 1];
-        for p in &surface.corners {
-            surface.for_bins(p, |b| count[b] += 1);
-        }
+        // Counted and filled in parallel: atomic counters, then atomic cursors.
+        let count: Vec<AtomicU32> = (0..bins).map(|_| AtomicU32::new(0)).collect();
+        mesh.triangles.par_iter().for_each(|t| {
+            if let Some(p) = surface.corners(t) {
+                surface.for_bins(&p, |b| {
+                    count[b].fetch_add(1, Ordering::Relaxed);
+                });
+            }
+        });
         let mut start = vec![0u32; bins + 1];
         for b in 0..bins {
-            start[b + 1] = start[b] + count[b];
+            start[b + 1] = start[b] + count[b].load(Ordering::Relaxed);
         }
-        let mut fill = start.clone();
-        let mut members = vec![0u32; start[bins] as usize];
-        for (id, p) in surface.corners.iter().enumerate() {
-            surface.for_bins(p, |b| {
-                members[fill[b] as usize] = id as u32;
-                fill[b] += 1;
-            });
-        }
+        drop(count);
+        let cursor: Vec<AtomicU32> = start[..bins].iter().map(|&s| AtomicU32::new(s)).collect();
+        let members: Vec<AtomicU32> = (0..start[bins]).map(|_| AtomicU32::new(0)).collect();
+        mesh.triangles.par_iter().enumerate().for_each(|(id, t)| {
+            if let Some(p) = surface.corners(t) {
+                surface.for_bins(&p, |b| {
+                    let slot = cursor[b].fetch_add(1, Ordering::Relaxed);
+                    members[slot as usize].store(id as u32, Ordering::Relaxed);
+                });
+            }
+        });
         surface.start = start;
-        surface.members = members;
+        surface.members = members.into_iter().map(AtomicU32::into_inner).collect();
         surface
+    }
+
+    /// A triangle's corners, or `None` for one with a bad index, a non-finite corner or no
+    /// area (whose normal is undefined).
+    fn corners(&self, t: &[u32; 3]) -> Option<[[f64; 3]; 3]> {
+        let p = triangle(self.mesh, t)?;
+        (plane(&p).0 != [0.0; 3]).then_some(p)
     }
 
     fn bin_of(&self, q: [f64; 3]) -> [usize; 3] {
@@ -106,30 +116,34 @@ impl Surface {
         let reach = reach.min(self.side * (1.0 - 1e-9));
         let lo = self.bin_of(p.map(|c| c - reach));
         let hi = self.bin_of(p.map(|c| c + reach));
-        let mut best: Option<(f64, [f64; 3], u32)> = None;
+        let mut best: Option<(f64, [f64; 3], u32, [f64; 3])> = None;
         for z in lo[2]..=hi[2] {
             for y in lo[1]..=hi[1] {
                 for x in lo[0]..=hi[0] {
                     let b = x + self.dims[0] * (y + self.dims[1] * z);
                     for &id in &self.members[self.start[b] as usize..self.start[b + 1] as usize] {
-                        let bound = best.map_or(reach, |(d, _, _)| d);
-                        let (n, off) = self.planes[id as usize];
+                        let Some(corners) = triangle(self.mesh, &self.mesh.triangles[id as usize])
+                        else {
+                            continue;
+                        };
+                        let bound = best.map_or(reach, |(d, ..)| d);
+                        let (n, off) = plane(&corners);
                         if (dot(n, p) - off).abs() > bound {
                             continue;
                         }
-                        let q = closest_on_triangle(p, &self.corners[id as usize]);
+                        let q = closest_on_triangle(p, &corners);
                         let d = distance(p, q);
-                        if d <= bound && best.is_none_or(|(bd, _, _)| d < bd) {
-                            best = Some((d, q, id));
+                        // Ties go to the lower index: the bins' order is the threads'.
+                        let better =
+                            best.is_none_or(|(bd, _, bid, _)| d < bd || (d == bd && id < bid));
+                        if d <= bound && better {
+                            best = Some((d, q, id, n));
                         }
                     }
                 }
             }
         }
-        best.map(|(_, point, id)| Patch {
-            point,
-            normal: self.planes[id as usize].0,
-        })
+        best.map(|(_, point, _, normal)| Patch { point, normal })
     }
 }
 
