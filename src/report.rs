@@ -72,7 +72,7 @@ pub struct Report {
     /// voxel it was measured on; absent with `[build] report = "basic"`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub wall_thickness: Option<Spread>,
-    /// Local thickness of the void within the output's box (blocks and SDF boxes only).
+    /// Local thickness of the void within the output's box (blocks of a cell only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pore_size: Option<Spread>,
     /// The genus (handles) of each solid piece, largest piece first (at most

@@ -225,8 +225,9 @@ impl Graph {
                 encoding: output.encoding,
                 stem: output.stem.clone(),
                 report: manifest.report,
-                // Given bounds here; else the box the program is contoured over.
-                pore_box: output.bounds,
+                // A program's box is its solid's or the user's, not the lattice's: the void
+                // round a part filled by a program (a ball of gyroid) is not a pore.
+                pore_box: None,
             };
             let mesh = graph.islands(name, &output.islands, solid);
             let write = graph.push(format!("write:{name}"), Stage::Write(write), vec![mesh]);

@@ -8,9 +8,9 @@
 //!   sample spacing (recovered from its mean triangle area, see [`measure::sample_spacing`]), coarser
 //!   only to keep a part within [`MEASURE_VOXELS`] voxels; each figure carries the voxel it
 //!   was measured with, so a wall of few voxels reads as what it is.
-//! - Pores are measured only inside a box domain (blocks, SDF boxes): elsewhere (a tiled
-//!   part, a fill within a mesh) the void round the part is not a pore, and `pore_size` is
-//!   absent.
+//! - Pores are measured only inside a block's box domain, which the lattice fills by
+//!   construction: elsewhere (a tiled part, a fill within a mesh, an SDF program's solid) the
+//!   void round the part is not a pore, and `pore_size` is absent.
 //! - A streamed (chunked) mesh is gathered whole to be measured when it has at most
 //!   [`MAX_TRIANGLES`] triangles; a larger one keeps its topology but not local thickness,
 //!   and [`Measures::not_measured`] says why.

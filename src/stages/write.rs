@@ -81,7 +81,8 @@ pub struct WriteStage {
     /// How much of the mesh to measure ([`measure`]), while the files are written.
     pub report: ReportLevel,
     /// The box whose void is the output's pores: a block's domain; `None` where the void
-    /// round the part is not a pore (a tiled part, a fill within a mesh, an element).
+    /// round the part is not a pore (a tiled part, a fill within a mesh, an element, an SDF
+    /// program's solid).
     pub pore_box: Option<[[f64; 3]; 2]>,
 }
 
@@ -177,9 +178,7 @@ impl WriteStage {
             Ok(Some(match input {
                 MeshInput::Whole(artifact) if artifact.planar.is_some() => return Ok(None),
                 MeshInput::Whole(artifact) => {
-                    // An SDF output's box is found when it is contoured.
-                    let pores = self.pore_box.or(artifact.domain);
-                    measure::measure(&artifact.mesh, self.report, pores)
+                    measure::measure(&artifact.mesh, self.report, self.pore_box)
                 }
                 MeshInput::Chunked { chunks, .. } => {
                     measure::measure_chunked(chunks, self.report, None).map_err(|e| {
