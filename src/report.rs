@@ -159,7 +159,7 @@ impl Report {
                         .as_ref()
                         .and_then(|s| fraction_warning(s, volume_fraction, within)),
                 )
-                .chain(measures.and_then(measure_warning))
+                .chain(measures.into_iter().flat_map(measure_warnings))
                 .collect(),
             wall_thickness: measures.and_then(|m| m.wall_thickness),
             pore_size: measures.and_then(|m| m.pore_size),
@@ -277,12 +277,27 @@ fn fraction_warning(
 pub const FRACTION_TOLERANCE: f64 = 0.01;
 
 /// Area over volume for a solid of positive, finite volume.
-/// Local thickness that was asked for and not measured. (No warning is drawn from the
-/// figures themselves: their low percentiles hold the voxels at the part's cut edges, where
-/// local thickness goes to zero by definition.)
-fn measure_warning(m: &Measures) -> Option<String> {
-    let why = m.not_measured.as_ref()?;
-    Some(format!("wall thickness and pore size not measured: {why}"))
+/// Sealed cavities, and local thickness that was asked for and not measured. (No warning is
+/// drawn from the thickness figures themselves: their low percentiles hold the voxels at the
+/// part's cut edges, where local thickness goes to zero by definition.)
+fn measure_warnings(m: &Measures) -> impl Iterator<Item = String> + '_ {
+    let cavities = (m.cavities > 0).then(|| {
+        format!(
+            "{} sealed {} inside the solid: powder or resin stays trapped there (a skin or \
+             a cap closes the lattice off; open it with a drain hole, or leave the skin out)",
+            m.cavities,
+            if m.cavities == 1 {
+                "cavity"
+            } else {
+                "cavities"
+            }
+        )
+    });
+    let missing = m
+        .not_measured
+        .as_ref()
+        .map(|why| format!("wall thickness and pore size not measured: {why}"));
+    cavities.into_iter().chain(missing)
 }
 
 fn specific_surface(area: f64, volume: f64, planar: bool) -> Option<f64> {

@@ -31,8 +31,9 @@ use crate::cache::{KeyBuilder, Param};
 use crate::manifest::{GroupSpec, Output, Sizing, Symmetric};
 
 /// 3: shells contoured as bands of the field, with their wall in the payload. 4: sized
-/// solids (`wall`, `grow`, `volume_fraction`) and their summary in the payload.
-pub const VERSION: u32 = 4;
+/// solids (`wall`, `grow`, `volume_fraction`) and their summary in the payload. 5: point
+/// distances (tetrahedra, planar regions) projected onto the surface.
+pub const VERSION: u32 = 5;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct ContourStage {

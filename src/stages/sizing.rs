@@ -32,8 +32,9 @@ use super::symmetric::{FittedPayload, group_of};
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::{GroupSpec, NodalValue, Sizing, Target};
 
-/// 1: quantiles of 128³ (3D) or 512² (2D) midpoint samples.
-pub const VERSION: u32 = 1;
+/// 1: quantiles of 128³ (3D) or 512² (2D) midpoint samples. 2: point distances projected
+/// onto the surface, as the tiler evaluates them.
+pub const VERSION: u32 = 2;
 
 /// Midpoints per axis of a table's samples.
 const TABLE_SAMPLES_3D: usize = 128;

@@ -62,7 +62,9 @@ use crate::manifest::{
 /// after interpolation. 4: chunks of about 500k triangles (were 2M). 5: shells contoured as
 /// the band between their two levels, and their wall measured (`shell` in the head).
 /// 6: sized solids (`wall`, `grow`, `volume_fraction`) and their summary in the head.
-pub const VERSION: u32 = 6;
+/// 7: point-evaluated distances projected onto the surface (Newton): walls and growths
+/// moved, and entries made before that kept a version that no longer described them.
+pub const VERSION: u32 = 7;
 
 /// Triangles per chunk asked of the producer, about. Chunk boundaries are in the payload's
 /// bytes, so in its hash: the chunk size is a function of the resolution (in the key) alone,
