@@ -94,10 +94,16 @@ fn reports_count_solid_pieces_and_warn_about_more_than_one() {
     assert_eq!(pieces(network), (1, 1.0));
     assert!(warnings(network).is_empty());
 
-    // A hollow ball: two surfaces, one solid.
+    // A hollow ball: two surfaces, one solid, and its hollow is a sealed cavity (the one
+    // warning: powder or resin stays in it).
     let hollow = by_name(&reports, "hollow_ball");
     assert_eq!(pieces(hollow), (1, 1.0));
-    assert!(warnings(hollow).is_empty());
+    assert_eq!(hollow["cavities"], 1);
+    let warned = warnings(hollow);
+    assert!(
+        warned.len() == 1 && warned[0].starts_with("1 sealed cavity"),
+        "{warned:?}"
+    );
 
     // Tiled (streamed): P over the reference cube `[−½, ½]³` is 3 at its centre, so
     // `f ≥ 2` is a ball about each element's centre: 3 × 2 × 2 pieces.
