@@ -16,9 +16,7 @@ use crate::manifest::{self, Manifest};
 use crate::progress::Bars;
 use crate::report::Report;
 
-#[path = "crystal_command.rs"]
 mod crystal_command;
-#[path = "sdf_command.rs"]
 mod sdf_command;
 
 #[derive(Parser, Debug)]

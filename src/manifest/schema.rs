@@ -27,21 +27,13 @@ use super::source::Report;
 use crate::diagnostics::Diagnostic;
 use crate::stages::measure::ReportLevel;
 
-#[path = "crystals.rs"]
 mod crystals;
-#[path = "islands.rs"]
 mod islands;
-#[path = "meshes.rs"]
 mod meshes;
-#[path = "output_files.rs"]
 pub(crate) mod output_files;
-#[path = "scaffolds.rs"]
 mod scaffolds;
-#[path = "sdf.rs"]
 mod sdf;
-#[path = "sizing.rs"]
 mod sizing;
-#[path = "symmetry.rs"]
 mod symmetry;
 
 type Key<'i> = Spanned<DeString<'i>>;

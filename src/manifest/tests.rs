@@ -1280,12 +1280,9 @@ fn reference_example_is_valid() {
     assert_eq!(manifest.outputs["block"].stem, "block");
 }
 
-#[path = "mesh_tests.rs"]
 mod mesh_tests;
-#[path = "symmetry_tests.rs"]
 mod symmetry_tests;
 
-#[path = "sdf_tests.rs"]
 mod sdf_tests;
 
 mod crystal_cells {
@@ -1362,7 +1359,6 @@ mod crystal_cells {
     }
 }
 
-#[path = "scaffolds_tests.rs"]
 mod scaffolds_tests;
 
 // ---- outputs writing the same file ------------------------------------------------------------

@@ -708,7 +708,7 @@ samples = 8
 /// The symmetric example in the user's reference must stay a valid manifest.
 #[test]
 fn symmetric_reference_example_is_valid() {
-    let doc = include_str!("../../docs/manifest.md");
+    let doc = include_str!("../../../docs/manifest.md");
     let example = doc
         .split("## Symmetric cells")
         .nth(1)

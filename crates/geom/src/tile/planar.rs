@@ -549,5 +549,4 @@ fn norm(a: P3) -> f64 {
 }
 
 #[cfg(test)]
-#[path = "planar_tests.rs"]
 mod tests;

@@ -379,5 +379,4 @@ pub fn check_nodes(corners: &[u32], per_element: usize, nodes: &Nodes) -> Result
 }
 
 #[cfg(test)]
-#[path = "shape_tests.rs"]
 mod tests;
