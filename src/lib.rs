@@ -17,3 +17,6 @@ pub mod progress;
 pub mod report;
 pub mod stages;
 pub mod watch;
+
+#[cfg(test)]
+mod boundary_tests;

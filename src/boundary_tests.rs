@@ -1,0 +1,93 @@
+//! The architecture's mechanical invariants, checked on the source text
+//! (`docs/ARCHITECTURE.md` states them).
+
+use std::path::{Path, PathBuf};
+
+/// The modules that may reach the filesystem themselves (everything else goes through them).
+const TOUCH_FILES: &[&str] = &[
+    "cache/",
+    "files.rs",
+    "direct_file.rs",
+    "interrupt.rs",
+    "deferred_free.rs",
+    "build.rs",
+    "budget.rs",
+    "watch.rs",
+    "cli/sdf_command.rs",
+];
+
+/// What reaching the filesystem looks like in our code.
+const FILE_CALLS: &[&str] = &[
+    "std::fs",
+    "fs::",
+    "File::",
+    "OpenOptions",
+    "read_dir(",
+    "canonicalize(",
+    ".exists()",
+    ".is_file()",
+    ".is_dir()",
+    ".metadata()",
+];
+
+fn sources(dir: &Path, out: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).expect("read src").flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            sources(&path, out);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            out.push(path);
+        }
+    }
+}
+
+/// Test code may make scratch files anywhere: a module's tests live in a `tests` module
+/// (a file named `*tests.rs` or under a `tests/` directory), or after `#[cfg(test)]`.
+fn production_text(path: &Path, text: &str) -> Option<String> {
+    let name = path.file_name()?.to_string_lossy();
+    let in_tests_dir = path.components().any(|c| c.as_os_str() == "tests");
+    if name.ends_with("tests.rs") || in_tests_dir {
+        return None;
+    }
+    Some(text.split("#[cfg(test)]").next().unwrap_or("").to_string())
+}
+
+#[test]
+fn only_the_listed_modules_touch_the_filesystem() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    sources(&src, &mut files);
+    let mut offenders = Vec::new();
+    for path in &files {
+        let relative = path
+            .strip_prefix(&src)
+            .expect("under src")
+            .to_string_lossy()
+            .replace('\\', "/");
+        if TOUCH_FILES
+            .iter()
+            .any(|allowed| relative.starts_with(allowed))
+        {
+            continue;
+        }
+        let text = std::fs::read_to_string(path).expect("read source");
+        let Some(code) = production_text(path, &text) else {
+            continue;
+        };
+        for (line, content) in code.lines().enumerate() {
+            let trimmed = content.trim_start();
+            if trimmed.starts_with("//") {
+                continue;
+            }
+            if let Some(call) = FILE_CALLS.iter().find(|c| content.contains(*c)) {
+                offenders.push(format!("src/{relative}:{}: {call}", line + 1));
+            }
+        }
+    }
+    assert!(
+        offenders.is_empty(),
+        "filesystem calls outside the modules docs/ARCHITECTURE.md allows:\n{}",
+        offenders.join("\n")
+    );
+    assert!(files.len() > 50, "found only {} sources", files.len());
+}
