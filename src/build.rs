@@ -32,6 +32,7 @@ use latticebuild_geom::mesh_io::{Format, StlStream, Workers};
 
 use crate::cache::{Cache, CacheError, ContentHash, EntryReader, Key, Lookup, Opened, explain};
 use crate::graph::{Graph, NodeId};
+use crate::progress::Progress;
 use crate::stages::chunked::{ChunkedMesh, ChunkedWriter, is_chunked};
 use crate::stages::islands::{IslandsFailure, IslandsStage};
 use crate::stages::tile::TileOutput;
@@ -40,34 +41,6 @@ use crate::stages::{MeshArtifact, OutputSink, PendingFile, Prewritten, Stage, Wr
 
 /// A tile stage's inputs: its cells' payloads, the scaffold file's bytes, the density table.
 type TileInputs<'a> = (&'a [&'a [u8]], Option<&'a [u8]>, Option<&'a [u8]>);
-
-/// Shows the progress of long stages; see [`crate::progress`].
-pub trait Progress: Sync {
-    /// A bar for `node` with `steps` steps in all.
-    fn start(&self, node: &str, steps: u64) -> Box<dyn StageProgress + '_>;
-}
-
-/// The progress of one running stage. Dropping it clears its bar.
-pub trait StageProgress: Sync {
-    /// `n` more steps are done.
-    fn advance(&self, n: usize);
-    /// The stage moved on to another phase (shown beside the bar).
-    fn phase(&self, name: &str);
-}
-
-/// A progress display that shows nothing.
-pub struct NoProgress;
-
-impl Progress for NoProgress {
-    fn start(&self, _: &str, _: u64) -> Box<dyn StageProgress + '_> {
-        Box::new(NoProgress)
-    }
-}
-
-impl StageProgress for NoProgress {
-    fn advance(&self, _: usize) {}
-    fn phase(&self, _: &str) {}
-}
 
 /// Hands a mesh payload to a background cache write.
 type StoreMesh<'s> = dyn FnMut(Key, Arc<MeshArtifact>, ContentHash) + 's;

@@ -1,20 +1,17 @@
-//! The command line: argument parsing, the commands, and exit codes (0 ok, 1 build failure,
-//! 2 usage or manifest error). With the cache, the only module that touches the filesystem.
+//! The command line: argument parsing, dispatch to the commands, and exit codes (0 ok, 1
+//! build failure, 2 usage or manifest error). `build` and what the commands share are in
+//! [`crate::commands`].
 
-use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{ArgAction, Args, Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
 
-use crate::build::{Builder, NoProgress, Progress};
-use crate::cache::Cache;
-use crate::diagnostics::render;
-use crate::files::{OutputDir, write_atomically};
-use crate::graph::Graph;
-use crate::manifest::{self, Manifest};
-use crate::progress::Bars;
-use crate::report::Report;
+use crate::build::Builder;
+use crate::commands::build::{BuildArgs, run_build};
+use crate::commands::{Failure, ManifestArgs, compile, load_manifest, open_cache, sweep_outputs};
+use crate::files::OutputDir;
+use crate::progress::NoProgress;
 
 mod crystal_command;
 mod sdf_command;
@@ -92,65 +89,6 @@ pub struct CellArgs {
     /// Also evaluate the cell at these points (one per line, in the reference frame)
     #[arg(long, value_name = "FILE")]
     pub points: Option<PathBuf>,
-}
-
-#[derive(Args, Debug, Clone)]
-pub struct ManifestArgs {
-    /// The manifest (TOML)
-    pub manifest: PathBuf,
-    /// Override a manifest value, e.g. `--set outputs.g.offset=0.12` (repeatable)
-    #[arg(long = "set", value_name = "KEY=VALUE")]
-    pub set: Vec<String>,
-}
-
-#[derive(Args, Debug, Clone)]
-pub struct BuildArgs {
-    #[command(flatten)]
-    pub manifest: ManifestArgs,
-    /// Outputs to build (default: all)
-    pub targets: Vec<String>,
-    /// Worker threads (default: one per core)
-    #[arg(short = 'j', long = "jobs", value_name = "N")]
-    pub jobs: Option<usize>,
-    /// Print nothing but errors
-    #[arg(short, long, conflicts_with = "verbose")]
-    pub quiet: bool,
-    /// Say for every stage whether it ran and why
-    #[arg(short, long, action = ArgAction::Count)]
-    pub verbose: u8,
-    /// Also write the reports as one JSON array to FILE (`-` for stdout)
-    #[arg(long, value_name = "FILE")]
-    pub report: Option<String>,
-    /// Succeed even when an output's mesh is not watertight or not manifold (the files and
-    /// reports are written either way; the report lists the defects)
-    #[arg(long)]
-    pub allow_defects: bool,
-    /// Build even when the estimated memory or disk use exceeds what the machine has
-    #[arg(long)]
-    pub allow_large: bool,
-}
-
-/// Why a build did not succeed, with its exit code.
-pub enum Failure {
-    /// Bad manifest or arguments: exit 2. The text is already rendered.
-    Usage(String),
-    /// The build itself failed: exit 1.
-    Build(String),
-}
-
-impl Failure {
-    pub fn exit(self) -> ExitCode {
-        match self {
-            Failure::Usage(text) => {
-                eprint!("{text}");
-                ExitCode::from(2)
-            }
-            Failure::Build(text) => {
-                eprintln!("error: {text}");
-                ExitCode::from(1)
-            }
-        }
-    }
 }
 
 pub fn main() -> ExitCode {
@@ -268,146 +206,6 @@ fn set_jobs(jobs: Option<usize>) -> Result<(), Failure> {
         .map_err(|e| Failure::Build(format!("cannot start {jobs} worker threads: {e}")))
 }
 
-/// Loads and validates the manifest, rendering every diagnostic on failure.
-pub fn load_manifest(args: &ManifestArgs) -> Result<Manifest, Failure> {
-    manifest::load(&args.manifest, &args.set).map_err(|diags| Failure::Usage(render(&diags)))
-}
-
-fn open_cache(path: &Path, quiet: bool) -> Result<Cache, Failure> {
-    Cache::open_with(path, || {
-        if !quiet {
-            eprintln!(
-                "waiting for another build of `{}` to finish…",
-                path.display()
-            );
-        }
-    })
-    .map_err(|e| Failure::Build(e.to_string()))
-}
-
-fn compile(manifest: &Manifest) -> Result<Graph, Failure> {
-    Graph::compile(manifest).map_err(|cycle| Failure::Usage(format!("error: {cycle}\n")))
-}
-
-/// One build: manifest to files and reports.
-pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
-    let manifest = load_manifest(&args.manifest)?;
-    crate::files::check_report_path(args.report.as_deref(), &manifest).map_err(Failure::Usage)?;
-    let graph = compile(&manifest)?;
-    if let Err(unknown) = graph.needed(&args.targets) {
-        let names: Vec<&str> = graph.outputs.keys().map(String::as_str).collect();
-        let mut text = String::new();
-        for name in unknown {
-            text.push_str(&format!(
-                "error: no output named `{name}` in `{}`\n",
-                args.manifest.manifest.display()
-            ));
-            match latticebuild_geom::spelling::closest(&name, names.iter().copied()) {
-                Some(s) => text.push_str(&format!("  = help: did you mean `{s}`?\n")),
-                None => text.push_str(&format!("  = help: outputs are: {}\n", names.join(", "))),
-            }
-        }
-        return Err(Failure::Usage(text));
-    }
-    let estimates = crate::budget::estimate(&manifest, &args.targets);
-    if !args.allow_large {
-        let machine = crate::budget::Machine::probe(&manifest.out_dir);
-        let refused = crate::budget::refusals(&estimates, machine);
-        if !refused.is_empty() {
-            let mut text = String::new();
-            for why in refused {
-                text.push_str(&format!("error: {why}\n"));
-            }
-            text.push_str(
-                "  = help: lower the samples or resolution, or pass `--allow-large` to build \
-                 anyway (the figures are upper-end estimates)\n",
-            );
-            return Err(Failure::Usage(text));
-        }
-    }
-    let cache = open_cache(&manifest.path, args.quiet)?;
-    sweep_outputs(&manifest, args.verbose > 0);
-    let sink = OutputDir::new(manifest.out_dir.clone());
-    let bars;
-    let progress: &dyn Progress = if !args.quiet && std::io::stderr().is_terminal() {
-        bars = Bars::new();
-        &bars
-    } else {
-        &NoProgress
-    };
-    let results = Builder::new(&graph, &cache, &sink, progress)
-        .build(&args.targets)
-        .map_err(|e| Failure::Build(e.to_string()))?;
-    // The outputs are in place: what they replaced, and the cache entries gc collected, are
-    // freed by a detached helper, so the command need not wait for the disk. Handed over
-    // before anything is printed: a closed stdout or stderr ends the process at its next
-    // write (SIGPIPE, see main.rs), which would leave them under their temporary names.
-    let mut freed = sink.take_replaced();
-    freed.extend(cache.take_collected());
-    crate::deferred_free::free_detached(freed);
-    let mut reports = Vec::new();
-    for result in &results {
-        if args.verbose > 0 {
-            for run in &result.stages {
-                if run.cached {
-                    eprintln!("  {}: cached", run.node);
-                } else {
-                    eprintln!(
-                        "  {}: ran in {:.2} s because {}",
-                        run.node,
-                        run.seconds,
-                        run.why.join("; ")
-                    );
-                }
-            }
-        }
-        let mut report = Report::new(&manifest, result);
-        report.estimate = estimates
-            .iter()
-            .find(|(name, _)| *name == result.name)
-            .map(|(_, e)| e.clone());
-        let path = manifest
-            .out_dir
-            .join(format!("{}.report.json", result.name));
-        let json = serde_json::to_string_pretty(&report).expect("report serializes");
-        write_atomically(&path, &mut |w| w.write_all(json.as_bytes()))
-            .map_err(|e| Failure::Build(format!("cannot write `{}`: {e}", path.display())))?;
-        if !args.quiet {
-            eprintln!("{}", report.summary_line());
-            for line in report.warning_lines() {
-                eprintln!("{line}");
-            }
-        }
-        reports.push(report);
-    }
-    match args.report.as_deref() {
-        None => {}
-        Some("-") => {
-            let json = serde_json::to_string_pretty(&reports).expect("reports serialize");
-            println!("{json}");
-        }
-        Some(file) => {
-            let json = serde_json::to_string_pretty(&reports).expect("reports serialize");
-            crate::files::write_user_file(Path::new(file), &mut |w| w.write_all(json.as_bytes()))
-                .map_err(|e| Failure::Build(format!("cannot write `{file}`: {e}")))?;
-        }
-    }
-    let defective: Vec<String> = reports
-        .iter()
-        .filter(|r| !r.defects.is_empty())
-        .map(|r| format!("`{}`: {}", r.name, r.defects.join("; ")))
-        .collect();
-    if !defective.is_empty() && !args.allow_defects {
-        return Err(Failure::Build(format!(
-            "{} output(s) failed the mesh check (written and reported, but not usable as \
-             solids; `--allow-defects` accepts them):\n  {}",
-            defective.len(),
-            defective.join("\n  ")
-        )));
-    }
-    Ok(())
-}
-
 fn run_graph(args: &ManifestArgs) -> Result<(), Failure> {
     let manifest = load_manifest(args)?;
     let graph = compile(&manifest)?;
@@ -417,18 +215,6 @@ fn run_graph(args: &ManifestArgs) -> Result<(), Failure> {
         println!("{line}");
     }
     Ok(())
-}
-
-/// Removes the temporary files that killed builds left among the outputs.
-fn sweep_outputs(manifest: &Manifest, verbose: bool) {
-    for path in crate::files::sweep_stale_temporaries(&manifest::output_dirs(manifest)) {
-        if verbose {
-            eprintln!(
-                "  removed `{}`, left by an interrupted build",
-                path.display()
-            );
-        }
-    }
 }
 
 fn run_clean(args: &ManifestArgs) -> Result<(), Failure> {

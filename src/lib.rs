@@ -5,6 +5,7 @@ pub mod budget;
 pub mod build;
 pub mod cache;
 pub mod cli;
+pub mod commands;
 pub mod deferred_free;
 pub mod diagnostics;
 pub mod direct_file;

@@ -1,12 +1,40 @@
-//! Progress bars for long stages: shown only on a terminal, only when not quiet, and only once
-//! a stage has taken longer than half a second, so quick builds print nothing but summaries.
+//! How long stages report progress ([`Progress`], [`StageProgress`]), and the bars that show
+//! it: shown only on a terminal, only when not quiet, and only once a stage has taken longer
+//! than half a second, so quick builds print nothing but summaries. The stages and the
+//! builder both depend on this module, not on each other for it.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use crate::build::{Progress, StageProgress};
+/// Shows the progress of long stages ([`Bars`] on a terminal, [`NoProgress`] elsewhere).
+pub trait Progress: Sync {
+    /// A bar for `node` with `steps` steps in all.
+    fn start(&self, node: &str, steps: u64) -> Box<dyn StageProgress + '_>;
+}
+
+/// The progress of one running stage. Dropping it clears its bar.
+pub trait StageProgress: Sync {
+    /// `n` more steps are done.
+    fn advance(&self, n: usize);
+    /// The stage moved on to another phase (shown beside the bar).
+    fn phase(&self, name: &str);
+}
+
+/// A progress display that shows nothing.
+pub struct NoProgress;
+
+impl Progress for NoProgress {
+    fn start(&self, _: &str, _: u64) -> Box<dyn StageProgress + '_> {
+        Box::new(NoProgress)
+    }
+}
+
+impl StageProgress for NoProgress {
+    fn advance(&self, _: usize) {}
+    fn phase(&self, _: &str) {}
+}
 
 const DELAY: Duration = Duration::from_millis(500);
 

@@ -24,7 +24,8 @@ use std::time::Duration;
 use notify::RecursiveMode;
 use notify_debouncer_full::{DebounceEventResult, new_debouncer};
 
-use crate::cli::{BuildArgs, Failure, load_manifest, run_build};
+use crate::commands::build::{BuildArgs, run_build};
+use crate::commands::{Failure, load_manifest};
 use crate::interrupt::set_idle;
 
 /// What a watched file held: `None` when it could not be read as a regular file.

@@ -31,8 +31,8 @@ use latticebuild_geom::sdf::{
 
 use super::Failure;
 use crate::budget;
-use crate::build::NoProgress;
 use crate::files::{output_problem, read_input, read_input_text, write_user_file};
+use crate::progress::NoProgress;
 use crate::stages::sdf::{box_text, contour_field, mesh_field};
 
 /// `file` words' meshes from the filesystem: a path is relative to the include file holding

@@ -26,9 +26,9 @@ use super::artifact::{MeshArtifact, MeshSummary, Planar, ShellSummary};
 use super::mesh::part_sdf;
 use super::sizing::{DensityStage, Over, cell_field, sized_field, table_of};
 use super::symmetric::group_of;
-use crate::build::StageProgress;
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::{GroupSpec, Output, Sizing, Symmetric};
+use crate::progress::StageProgress;
 
 /// 3: shells contoured as bands of the field, with their wall in the payload. 4: sized
 /// solids (`wall`, `grow`, `volume_fraction`) and their summary in the payload. 5: point

@@ -18,9 +18,9 @@ use latticebuild_geom::sdf::{self, Aabb, ExternalField, ExternalSolids, Program,
 use latticebuild_geom::validate::{self, MeshCheck};
 
 use super::artifact::{MeshArtifact, MeshSummary};
-use crate::build::StageProgress;
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::{SdfOutput, SdfResolution, voxel_samples};
+use crate::progress::StageProgress;
 
 /// 2: the summary counts the mesh's connected pieces.
 pub const VERSION: u32 = 2;

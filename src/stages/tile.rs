@@ -51,12 +51,12 @@ use super::sizing::{
     solve_uniform, table_of, tabled_fraction,
 };
 use super::symmetric::{FittedPayload, group_of};
-use crate::build::StageProgress;
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::{
     GroupSpec, Manifest, NodalValue, ScaffoldGrid, ScaffoldSource, Sizing, Target, Thicken,
     TiledOutput, tiling_group,
 };
+use crate::progress::StageProgress;
 
 /// 3: quadratic elements interpolate nodal values through all their nodes; weights clamped
 /// after interpolation. 4: chunks of about 500k triangles (were 2M). 5: shells contoured as
