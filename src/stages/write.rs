@@ -99,6 +99,15 @@ impl WriteStage {
     }
 
     pub fn key_params(&self, key: KeyBuilder) -> KeyBuilder {
+        // The pore box's six numbers, or none.
+        let pores = Param::List(
+            self.pore_box
+                .iter()
+                .flatten()
+                .flatten()
+                .map(|&c| Param::F64(c))
+                .collect(),
+        );
         let formats = self
             .formats
             .iter()
@@ -108,7 +117,7 @@ impl WriteStage {
             .param("ascii", self.encoding == Encoding::Ascii)
             .param("path", self.stem.as_str())
             .param("report", self.report.name())
-            .param("pores", format!("{:?}", self.pore_box).as_str())
+            .param("pores", pores)
     }
 
     /// The relative path of the file for `format`.
