@@ -12,8 +12,8 @@ const TOUCH_FILES: &[&str] = &[
     "deferred_free.rs",
     "build.rs",
     "budget.rs",
-    "watch.rs",
-    "cli/sdf_command.rs",
+    "commands/watch.rs",
+    "commands/sdf.rs",
 ];
 
 /// What reaching the filesystem looks like in our code.

@@ -1,20 +1,16 @@
-//! The command line: argument parsing, dispatch to the commands, and exit codes (0 ok, 1
-//! build failure, 2 usage or manifest error). `build` and what the commands share are in
-//! [`crate::commands`].
+//! The command line: argument parsing, `--jobs`, and dispatch to the commands in
+//! [`crate::commands`], one module per command. Exit codes: 0 ok, 1 build failure, 2 usage or
+//! manifest error.
 
-use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Args, Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 
-use crate::build::Builder;
 use crate::commands::build::{BuildArgs, run_build};
-use crate::commands::{Failure, ManifestArgs, compile, load_manifest, open_cache, sweep_outputs};
-use crate::files::OutputDir;
-use crate::progress::NoProgress;
-
-mod crystal_command;
-mod sdf_command;
+use crate::commands::cell::CellArgs;
+use crate::commands::crystal::CrystalArgs;
+use crate::commands::sdf::SdfArgs;
+use crate::commands::{self, Failure, ManifestArgs};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -59,36 +55,10 @@ enum Command {
     )]
     Sdf(SdfArgs),
     /// Reconstruct the periodic surface through a crystal's atoms (CIF or extended XYZ)
-    Crystal(crystal_command::CrystalArgs),
+    Crystal(CrystalArgs),
     /// Internal: frees files a build renamed away (temporary names only), after it returned
     #[command(hide = true)]
     FreeFiles { paths: Vec<std::path::PathBuf> },
-}
-
-#[derive(Args, Debug, Clone)]
-pub struct SdfArgs {
-    /// The program's words, with -s, -b, -o and @FILE anywhere among them
-    #[arg(
-        value_name = "WORDS",
-        required = true,
-        trailing_var_arg = true,
-        allow_hyphen_values = true
-    )]
-    pub words: Vec<String>,
-}
-
-#[derive(Args, Debug, Clone)]
-pub struct CellArgs {
-    #[command(flatten)]
-    pub manifest: ManifestArgs,
-    /// The cell, by its name in the manifest
-    pub name: String,
-    /// Print JSON instead of a table of the largest terms
-    #[arg(long)]
-    pub json: bool,
-    /// Also evaluate the cell at these points (one per line, in the reference frame)
-    #[arg(long, value_name = "FILE")]
-    pub points: Option<PathBuf>,
 }
 
 pub fn main() -> ExitCode {
@@ -98,91 +68,31 @@ pub fn main() -> ExitCode {
             if let Err(f) = set_jobs(args.jobs) {
                 return f.exit();
             }
-            match run_build(&args) {
-                Ok(()) => ExitCode::SUCCESS,
-                Err(f) => f.exit(),
-            }
+            exit(run_build(&args))
         }
         Command::Watch(args) => {
             if let Err(f) = set_jobs(args.jobs) {
                 return f.exit();
             }
-            crate::watch::watch(&args)
+            commands::watch::watch(&args)
         }
-        Command::Graph(args) => match run_graph(&args) {
-            Ok(()) => ExitCode::SUCCESS,
-            Err(f) => f.exit(),
-        },
-        Command::Clean(args) => match run_clean(&args) {
-            Ok(()) => ExitCode::SUCCESS,
-            Err(f) => f.exit(),
-        },
-        Command::Cell(args) => match run_cell(&args) {
-            Ok(()) => ExitCode::SUCCESS,
-            Err(f) => f.exit(),
-        },
-        Command::Sdf(args) => sdf_command::run(&args.words),
-        Command::Crystal(args) => crystal_command::run(&args),
+        Command::Graph(args) => exit(commands::graph::run(&args)),
+        Command::Clean(args) => exit(commands::clean::run(&args)),
+        Command::Cell(args) => exit(commands::cell::run(&args)),
+        Command::Sdf(args) if args.asks_for_help() => {
+            let mut cli = Cli::command();
+            if let Some(sdf) = cli.find_subcommand_mut("sdf") {
+                let _ = sdf.print_long_help();
+            }
+            ExitCode::SUCCESS
+        }
+        Command::Sdf(args) => commands::sdf::run(&args),
+        Command::Crystal(args) => commands::crystal::run(&args),
         Command::FreeFiles { paths } => {
             crate::deferred_free::free_files(&paths);
             ExitCode::SUCCESS
         }
     }
-}
-
-fn run_cell(args: &CellArgs) -> Result<(), Failure> {
-    let manifest = load_manifest(&args.manifest)?;
-    let file = args.manifest.manifest.display().to_string();
-    let Some(cell) = manifest.cells.get(&args.name) else {
-        let names = manifest.cells.keys().map(String::as_str);
-        let help = match latticebuild_geom::spelling::closest(&args.name, names) {
-            Some(s) => format!("  = help: did you mean `{s}`?\n"),
-            None => String::new(),
-        };
-        return Err(Failure::Usage(format!(
-            "error: no cell named `{}` in `{file}`\n{help}",
-            args.name
-        )));
-    };
-    let Some(spec) = &cell.symmetric else {
-        return Err(Failure::Usage(format!(
-            "error: cell `{}` has no `symmetry`, so it has no coefficients to show\n  = help: add `symmetry = \"Oh\"` (or D3, D4, Td) to `[cells.{}]`\n",
-            args.name, args.name
-        )));
-    };
-    let group = crate::stages::symmetric::group_of(&spec.group).map_err(Failure::Build)?;
-    let points = match &args.points {
-        None => Vec::new(),
-        Some(path) => {
-            let text = crate::files::read_input_text(path).map_err(|e| {
-                Failure::Usage(format!("error: cannot read `{}`: {e}\n", path.display()))
-            })?;
-            crate::inspect::read_points(&path.display().to_string(), &text, group.dimension())
-                .map_err(Failure::Usage)?
-        }
-    };
-    let mut graph = compile(&manifest)?;
-    let node = graph
-        .compile_cell(&manifest, &args.name)
-        .map_err(|c| Failure::Usage(format!("error: {c}\n")))?;
-    let cache = open_cache(&manifest.path, true)?;
-    let sink = OutputDir::new(manifest.out_dir.clone());
-    let payload = Builder::new(&graph, &cache, &sink, &NoProgress)
-        .build_node(node)
-        .map_err(|e| Failure::Build(e.to_string()))?;
-    let fitted =
-        crate::stages::symmetric::FittedPayload::from_bytes(&payload).map_err(Failure::Build)?;
-    let report =
-        crate::inspect::report(&args.name, &fitted, &group, &points).map_err(Failure::Build)?;
-    if args.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&report).expect("cell report serializes")
-        );
-    } else {
-        print!("{}", crate::inspect::table(&report, 20));
-    }
-    Ok(())
 }
 
 fn set_jobs(jobs: Option<usize>) -> Result<(), Failure> {
@@ -206,22 +116,9 @@ fn set_jobs(jobs: Option<usize>) -> Result<(), Failure> {
         .map_err(|e| Failure::Build(format!("cannot start {jobs} worker threads: {e}")))
 }
 
-fn run_graph(args: &ManifestArgs) -> Result<(), Failure> {
-    let manifest = load_manifest(args)?;
-    let graph = compile(&manifest)?;
-    let cache = open_cache(&manifest.path, false)?;
-    let sink = OutputDir::new(manifest.out_dir.clone());
-    for line in crate::graph::status::lines(&graph, &cache, &sink) {
-        println!("{line}");
+fn exit(result: Result<(), Failure>) -> ExitCode {
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(f) => f.exit(),
     }
-    Ok(())
-}
-
-fn run_clean(args: &ManifestArgs) -> Result<(), Failure> {
-    let manifest = load_manifest(args)?;
-    let mut cache = open_cache(&manifest.path, false)?;
-    sweep_outputs(&manifest, false);
-    cache.clean().map_err(|e| Failure::Build(e.to_string()))?;
-    eprintln!("removed the cache of `{}`", manifest.path.display());
-    Ok(())
 }

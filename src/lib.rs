@@ -11,13 +11,11 @@ pub mod diagnostics;
 pub mod direct_file;
 pub mod files;
 pub mod graph;
-pub mod inspect;
 pub mod interrupt;
 pub mod manifest;
 pub mod progress;
 pub mod report;
 pub mod stages;
-pub mod watch;
 
 #[cfg(test)]
 mod boundary_tests;

@@ -1,6 +1,7 @@
-//! What the commands share: the manifest arguments, loading and compiling a manifest, the
-//! cache, and how a command fails ([`Failure`], with its exit code). `build` is the one
-//! command both the command line and `watch` run, so it lives here, below both of them.
+//! The commands, one module each, and what they share: the manifest arguments, loading and
+//! compiling a manifest, the cache, and how a command fails ([`Failure`], with its exit code).
+//! `watch` runs `build` (a sibling); nothing here imports [`crate::cli`], which only parses
+//! and dispatches.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -13,6 +14,12 @@ use crate::graph::Graph;
 use crate::manifest::{self, Manifest};
 
 pub mod build;
+pub mod cell;
+pub mod clean;
+pub mod crystal;
+pub mod graph;
+pub mod sdf;
+pub mod watch;
 
 #[derive(Args, Debug, Clone)]
 pub struct ManifestArgs {

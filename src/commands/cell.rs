@@ -5,11 +5,86 @@
 //! `f` in skew integer coordinates for D3; points are in the cell's Cartesian reference frame
 //! (centroid at the origin, cell size 1); `value` is Re Φ and `gradient` its Cartesian gradient.
 
+use std::path::PathBuf;
+
+use clap::Args;
 use serde::Serialize;
 
 use latticebuild_geom::symmetric::Group;
 
+use super::{Failure, ManifestArgs, compile, load_manifest, open_cache};
+use crate::build::Builder;
+use crate::files::OutputDir;
+use crate::progress::NoProgress;
 use crate::stages::symmetric::FittedPayload;
+
+#[derive(Args, Debug, Clone)]
+pub struct CellArgs {
+    #[command(flatten)]
+    pub manifest: ManifestArgs,
+    /// The cell, by its name in the manifest
+    pub name: String,
+    /// Print JSON instead of a table of the largest terms
+    #[arg(long)]
+    pub json: bool,
+    /// Also evaluate the cell at these points (one per line, in the reference frame)
+    #[arg(long, value_name = "FILE")]
+    pub points: Option<PathBuf>,
+}
+
+pub fn run(args: &CellArgs) -> Result<(), Failure> {
+    let manifest = load_manifest(&args.manifest)?;
+    let file = args.manifest.manifest.display().to_string();
+    let Some(cell) = manifest.cells.get(&args.name) else {
+        let names = manifest.cells.keys().map(String::as_str);
+        let help = match latticebuild_geom::spelling::closest(&args.name, names) {
+            Some(s) => format!("  = help: did you mean `{s}`?\n"),
+            None => String::new(),
+        };
+        return Err(Failure::Usage(format!(
+            "error: no cell named `{}` in `{file}`\n{help}",
+            args.name
+        )));
+    };
+    let Some(spec) = &cell.symmetric else {
+        return Err(Failure::Usage(format!(
+            "error: cell `{}` has no `symmetry`, so it has no coefficients to show\n  = help: add `symmetry = \"Oh\"` (or D3, D4, Td) to `[cells.{}]`\n",
+            args.name, args.name
+        )));
+    };
+    let group = crate::stages::symmetric::group_of(&spec.group).map_err(Failure::Build)?;
+    let points = match &args.points {
+        None => Vec::new(),
+        Some(path) => {
+            let text = crate::files::read_input_text(path).map_err(|e| {
+                Failure::Usage(format!("error: cannot read `{}`: {e}\n", path.display()))
+            })?;
+            read_points(&path.display().to_string(), &text, group.dimension())
+                .map_err(Failure::Usage)?
+        }
+    };
+    let mut graph = compile(&manifest)?;
+    let node = graph
+        .compile_cell(&manifest, &args.name)
+        .map_err(|c| Failure::Usage(format!("error: {c}\n")))?;
+    let cache = open_cache(&manifest.path, true)?;
+    let sink = OutputDir::new(manifest.out_dir.clone());
+    let payload = Builder::new(&graph, &cache, &sink, &NoProgress)
+        .build_node(node)
+        .map_err(|e| Failure::Build(e.to_string()))?;
+    let fitted =
+        crate::stages::symmetric::FittedPayload::from_bytes(&payload).map_err(Failure::Build)?;
+    let report = report(&args.name, &fitted, &group, &points).map_err(Failure::Build)?;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).expect("cell report serializes")
+        );
+    } else {
+        print!("{}", table(&report, 20));
+    }
+    Ok(())
+}
 
 #[derive(Debug, Serialize)]
 pub struct CellReport {

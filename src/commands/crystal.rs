@@ -6,7 +6,7 @@
 //! search reached `--max-scale` first (the report is still printed); 2 for bad arguments or a
 //! file that cannot be read or parsed (the error names its line and column).
 //!
-//! Invariant: like the rest of `cli.rs`, this is where the file is read; the geometry is the
+//! Invariant: the file is read here (through `files.rs`); the geometry is the
 //! same function the `crystal` stage runs.
 
 use std::path::PathBuf;

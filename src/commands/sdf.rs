@@ -12,7 +12,7 @@
 //! Exit codes as for `build`: 0 written, 2 bad arguments or program, 1 nothing could be
 //! written. One summary line on stderr, like the build's.
 //!
-//! Invariant: like the rest of `cli.rs`, this is where files are touched: included files and
+//! Invariant: this command touches files itself: included files and
 //! `file` meshes are read here (a relative name is relative to the include file naming it;
 //! only regular files are read, so a FIFO or a device is an error, not a wait), and the mesh
 //! is written to a temporary file renamed into place, in a directory that must exist.
@@ -29,11 +29,25 @@ use latticebuild_geom::sdf::{
     self, Aabb, ExternalField, ExternalSolids, IncludeResolver, Included, Program, Word,
 };
 
+use clap::Args;
+
 use super::Failure;
 use crate::budget;
 use crate::files::{output_problem, read_input, read_input_text, write_user_file};
 use crate::progress::NoProgress;
 use crate::stages::sdf::{box_text, contour_field, mesh_field};
+
+#[derive(Args, Debug, Clone)]
+pub struct SdfArgs {
+    /// The program's words, with -s, -b, -o and @FILE anywhere among them
+    #[arg(
+        value_name = "WORDS",
+        required = true,
+        trailing_var_arg = true,
+        allow_hyphen_values = true
+    )]
+    pub words: Vec<String>,
+}
 
 /// `file` words' meshes from the filesystem: a path is relative to the include file holding
 /// the word (to the working directory for words on the command line), like `@` names.
@@ -153,18 +167,17 @@ fn example(flag: &str) -> &'static str {
     }
 }
 
-/// Runs `latticebuild sdf` with its raw arguments.
-pub fn run(args: &[String]) -> ExitCode {
-    // clap sees `-h` only in first place, since the words may start with a hyphen.
-    if args.iter().any(|a| a == "-h" || a == "--help") {
-        use clap::CommandFactory;
-        let mut cli = super::Cli::command();
-        if let Some(sdf) = cli.find_subcommand_mut("sdf") {
-            let _ = sdf.print_long_help();
-        }
-        return ExitCode::SUCCESS;
+impl SdfArgs {
+    /// `-h` or `--help` anywhere among the words: clap sees it only in first place, since the
+    /// words may start with a hyphen.
+    pub fn asks_for_help(&self) -> bool {
+        self.words.iter().any(|a| a == "-h" || a == "--help")
     }
-    match command(args) {
+}
+
+/// Runs `latticebuild sdf` with its raw arguments.
+pub fn run(args: &SdfArgs) -> ExitCode {
+    match command(&args.words) {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => f.exit(),
     }
