@@ -8,8 +8,8 @@
 //! - No IO and no geometry: the only facts used beyond the tree are the TPMS library's names,
 //!   the format names, the expression parser, and the closure of symmetry groups (for
 //!   generators, and for comparing the groups of combined cells; see `symmetry.rs`).
-//! - The key lists below are the schema's single source of truth: unknown-key detection,
-//!   suggestions and `--set` typing ([`expects_string`]) all read them.
+//! - Every key the manifest accepts is listed once, in `keys.rs`: unknown-key detection,
+//!   suggestions and `--set` typing ([`expects_string`]) all read those lists.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::ops::Range;
@@ -29,6 +29,7 @@ use crate::stages::measure::ReportLevel;
 
 mod crystals;
 mod islands;
+mod keys;
 mod meshes;
 pub(crate) mod output_files;
 mod scaffolds;
@@ -36,91 +37,20 @@ mod sdf;
 mod sizing;
 mod symmetry;
 
+pub(crate) use keys::expects_string;
+use keys::{BUILD_KEYS, DOMAIN_KEYS, OUTPUT_KEYS, TOP_KEYS};
+
 type Key<'i> = Spanned<DeString<'i>>;
 type Value<'i> = Spanned<DeValue<'i>>;
 
-const TOP_KEYS: [&str; 4] = ["build", "cells", "scaffolds", "outputs"];
-const BUILD_KEYS: [&str; 3] = ["out_dir", "units", "report"];
 /// The length units `[build] units` accepts: what the model's numbers mean (reports echo it).
 pub(crate) const UNITS: [&str; 5] = ["mm", "cm", "m", "um", "in"];
-const CELL_KEYS: [&str; 18] = [
-    "tpms",
-    "expr",
-    "blend",
-    "minkowski",
-    "mesh",
-    "placement",
-    "sample",
-    "crystal",
-    "species",
-    "reconstruct",
-    "ps",
-    "symmetry",
-    "fit",
-    "extend",
-    "symmetrize",
-    "normal_to_faces",
-    "offset",
-    "invert",
-];
-const OUTPUT_KEYS: [&str; 21] = [
-    "cell",
-    "sdf",
-    "bounds",
-    "over",
-    "domain",
-    "cell_size",
-    "solid",
-    "wall",
-    "grow",
-    "volume_fraction",
-    "offset",
-    "thickness",
-    "samples",
-    "voxel",
-    "formats",
-    "ascii",
-    "path",
-    "within",
-    "skin",
-    "keep",
-    "min_island_volume",
-];
-const DOMAIN_KEYS: [&str; 2] = ["min", "max"];
 const SOLIDS: [&str; 4] = ["inside", "outside", "shell", "eccentric_shell"];
 const AXES: [&str; 3] = ["x", "y", "z"];
 
 /// The largest number of samples allowed along one axis (a guard against typos such as
 /// `voxel = 1e-9`, which would otherwise ask for an absurd grid).
 pub(crate) const MAX_SAMPLES: i64 = MAX_SAMPLES_PER_AXIS as i64;
-
-/// Whether the schema expects a string at this dotted path (for typing `--set` values).
-pub(crate) fn expects_string(path: &[&str]) -> bool {
-    matches!(
-        path,
-        ["build", "out_dir" | "units" | "report"]
-            | [
-                "cells",
-                _,
-                "tpms"
-                    | "expr"
-                    | "extend"
-                    | "mesh"
-                    | "placement"
-                    | "sample"
-                    | "crystal"
-                    | "species"
-            ]
-            | [
-                "outputs",
-                _,
-                "cell" | "sdf" | "over" | "solid" | "path" | "within" | "scaffold" | "keep"
-            ]
-            | ["outputs", _, "cell", "by"]
-            | ["scaffolds", _, "mesh"]
-            | ["scaffolds", _, "grid", "element"]
-    )
-}
 
 /// A value's type with its article, for "found …" labels.
 pub(crate) fn describe(value: &DeValue<'_>) -> &'static str {

@@ -12,6 +12,7 @@ use latticebuild_geom::periodic::PsTerm;
 use toml::de::DeValue;
 
 use super::super::model::{CellSource, CrystalCell};
+use super::keys::{PS_KEYS, RECONSTRUCT_KEYS, TERM_KEYS};
 use super::meshes::FileKind;
 use super::{Checker, Fields, Value};
 
@@ -21,9 +22,6 @@ const CRYSTAL_FILES: FileKind = FileKind {
     noun: "crystal",
     help: "give a CIF file, or extended XYZ with a `Lattice=\"…\"`",
 };
-const RECONSTRUCT_KEYS: [&str; 4] = ["tolerance", "max_scale", "include_images", "optimize"];
-const PS_KEYS: [&str; 1] = ["terms"];
-const TERM_KEYS: [&str; 3] = ["moment", "scale", "vector"];
 /// The largest `max_scale` (scales 1, 2, …, 64: seven steps of the search).
 const MAX_SCALE: i64 = 64;
 

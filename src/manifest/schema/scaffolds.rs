@@ -32,49 +32,11 @@ use super::super::model::{
     Cell, GroupSpec, MAX_GRID_ELEMENTS, NodalValue, Scaffold, ScaffoldGrid, ScaffoldSource, Sizing,
     Thicken, TiledOutput, TiledTransition, tiling_group,
 };
+use super::keys::{ALL_KEYS, GRID_KEYS, SCAFFOLD_KEYS, THICKEN_KEYS, TILED_KEYS, TRANSITION_KEYS};
 use super::meshes::FileKind;
-use super::{Checker, Fields, Key, OUTPUT_KEYS, Value};
+use super::{Checker, Fields, Key, Value};
 
-const SCAFFOLD_KEYS: [&str; 2] = ["mesh", "grid"];
-const GRID_KEYS: [&str; 4] = ["min", "max", "divisions", "element"];
 const GRID_ELEMENTS: [&str; 4] = ["hex", "tet", "quad", "tri"];
-const TRANSITION_KEYS: [&str; 2] = ["blend", "by"];
-/// The keys a tiled output reads; the other output keys are errors beside `scaffold`.
-const TILED_KEYS: [&str; 17] = [
-    "scaffold",
-    "cell",
-    "solid",
-    "wall",
-    "grow",
-    "volume_fraction",
-    "offset",
-    "thickness",
-    "resolution",
-    "skin",
-    "extrude",
-    "thickness_normal",
-    "formats",
-    "ascii",
-    "path",
-    "keep",
-    "min_island_volume",
-];
-/// The keys that make a 2D scaffold's region a solid (at most one).
-const THICKEN_KEYS: [&str; 2] = ["extrude", "thickness_normal"];
-/// Every output key plus the tiled output's own, for unknown-key suggestions.
-const ALL_KEYS: [&str; OUTPUT_KEYS.len() + 4] = {
-    let mut all = [""; OUTPUT_KEYS.len() + 4];
-    let mut i = 0;
-    while i < OUTPUT_KEYS.len() {
-        all[i] = OUTPUT_KEYS[i];
-        i += 1;
-    }
-    all[i] = "scaffold";
-    all[i + 1] = "resolution";
-    all[i + 2] = THICKEN_KEYS[0];
-    all[i + 3] = THICKEN_KEYS[1];
-    all
-};
 pub(crate) const DEFAULT_RESOLUTION: usize = 12;
 const MAX_RESOLUTION: i64 = 256;
 const NODE_DATA_PREFIX: &str = "nodedata:";

@@ -21,8 +21,9 @@ use toml::de::DeValue;
 
 use super::super::expression;
 use super::super::model::{MeshFile, SdfOutput, SdfResolution, voxel_samples};
+use super::keys::{DOMAIN_KEYS, OUTPUT_KEYS};
 use super::meshes::MESH_FILES;
-use super::{Checker, DOMAIN_KEYS, Fields, Key, OUTPUT_KEYS, Value};
+use super::{Checker, Fields, Key, Value};
 
 /// Keys of cell outputs, each with why it does not apply to an SDF output and what to do.
 const CELL_OUTPUT_KEYS: [(&str, &str, &str); 9] = [

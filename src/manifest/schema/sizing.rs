@@ -17,10 +17,8 @@ use toml::de::DeValue;
 
 use super::super::expression;
 use super::super::model::{NodalValue, Sizing, Target};
+use super::keys::SIZING_KEYS;
 use super::{Checker, Fields, Value};
-
-/// The keys that size a solid in the user's terms.
-pub(super) const SIZING_KEYS: [&str; 3] = ["wall", "grow", "volume_fraction"];
 
 /// Where a graded value may come from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -28,35 +28,14 @@ use super::super::expression;
 use super::super::model::{
     Cell, CellSource, FitResolution, GroupSpec, MinkowskiOp, Name, Symmetric,
 };
+use super::keys::{
+    BLEND_KEYS, CELL_KEYS, FIT_KEYS, GENERATOR_KEYS, MINKOWSKI_KEYS, SAMPLING_KEYS, SOURCE_KEYS,
+    SYMMETRIC_KEYS,
+};
 use super::{Checker, Fields, Key, Value, list};
 
 /// The named groups, in their canonical spelling.
 pub(super) const GROUP_NAMES: [&str; 4] = ["D3", "D4", "Td", "Oh"];
-/// The keys that give a cell its shape; a cell has exactly one.
-pub(super) const SOURCE_KEYS: [&str; 7] = [
-    "tpms",
-    "expr",
-    "blend",
-    "minkowski",
-    "mesh",
-    "crystal",
-    "ps",
-];
-/// The keys of a fitted cell other than `symmetry`, in the order they are documented.
-pub(super) const SYMMETRIC_KEYS: [&str; 6] = [
-    "fit",
-    "extend",
-    "symmetrize",
-    "normal_to_faces",
-    "offset",
-    "invert",
-];
-/// The keys of [`SYMMETRIC_KEYS`] that concern sampling a source, so not a combination.
-const SAMPLING_KEYS: [&str; 2] = ["extend", "symmetrize"];
-const GENERATOR_KEYS: [&str; 2] = ["generators", "dimension"];
-const FIT_KEYS: [&str; 2] = ["n", "tolerance"];
-const BLEND_KEYS: [&str; 2] = ["cells", "weights"];
-const MINKOWSKI_KEYS: [&str; 2] = ["op", "cells"];
 const EXTENDS: [&str; 2] = ["mirror", "none"];
 const MINKOWSKI_OPS: [&str; 2] = ["sum", "difference"];
 
@@ -160,7 +139,7 @@ impl Checker<'_, '_, '_> {
         let help = format!("define it as a `[cells.{name}]` table");
         let table = self.table(&format!("cells.{name}"), value, &help)?;
         let within = format!("in cell `{name}`");
-        let fields = self.fields(table, &super::CELL_KEYS, &within);
+        let fields = self.fields(table, &CELL_KEYS, &within);
         let header = value.span();
         let path = |k: &str| format!("cells.{name}.{k}");
 
