@@ -12,7 +12,7 @@ use std::collections::BTreeMap;
 
 use latticebuild_geom::islands::IslandFilter;
 
-use crate::manifest::{CellSource, FitResolution, Manifest, MeshFile, ScaffoldSource};
+use crate::manifest::{CellSource, FitResolution, InputFile, Manifest, ScaffoldSource};
 use crate::stages::Stage;
 use crate::stages::crystal::CrystalStage;
 use crate::stages::islands::IslandsStage;
@@ -77,7 +77,7 @@ impl CellCompiler<'_> {
     }
 
     /// The `file:` node of a mesh file, once per file name.
-    fn file(&mut self, graph: &mut Graph, file: &MeshFile) -> NodeId {
+    fn file(&mut self, graph: &mut Graph, file: &InputFile) -> NodeId {
         let node = format!("file:{}", file.given);
         if let Some(&id) = self.done.get(&node) {
             return id;

@@ -82,8 +82,8 @@ pub enum CellSource {
 /// `1 ≤ max_scale ≤ 64`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CrystalCell {
-    /// The CIF or extended XYZ file (a [`MeshFile`] in all but name: given, resolved, span).
-    pub file: MeshFile,
+    /// The CIF or extended XYZ file.
+    pub file: InputFile,
     /// Only the atoms of this element (case-insensitive); all atoms when `None`.
     pub species: Option<String>,
     pub tolerance: f64,
@@ -94,9 +94,10 @@ pub struct CrystalCell {
     pub optimize: bool,
 }
 
-/// A triangle mesh file named in the manifest (`mesh = …`, `within = …`).
+/// A file the manifest names as an input: a triangle mesh (`mesh = …`, `within = …`), a
+/// crystal (CIF, extended XYZ), a scaffold mesh, or a `file` mesh of an SDF program.
 #[derive(Clone, Debug, PartialEq)]
-pub struct MeshFile {
+pub struct InputFile {
     /// As written in the manifest (shown in messages).
     pub given: String,
     /// Resolved against the manifest's directory.
@@ -108,7 +109,7 @@ pub struct MeshFile {
 /// A cell whose solid is a triangle mesh.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshCell {
-    pub file: MeshFile,
+    pub file: InputFile,
     /// `fit`: scale and centre the mesh's bounding box into the reference cell; otherwise the
     /// mesh is already in the reference frame (centre at the origin, size 1).
     pub fit_placement: bool,
@@ -194,7 +195,7 @@ pub struct Output {
     pub stem: String,
     /// `within = "part.stl"`: the lattice is intersected with the solid of this mesh (model
     /// units).
-    pub within: Option<MeshFile>,
+    pub within: Option<InputFile>,
     /// `skin = t`: a closed skin of thickness `t` (model units) along the part's surface;
     /// only with `within`.
     pub skin: Option<f64>,
@@ -210,7 +211,7 @@ pub struct SdfOutput {
     pub program: Program,
     /// The mesh files its `file` words name, once each in order of first use; each span is
     /// the path's word in the program string.
-    pub files: Vec<MeshFile>,
+    pub files: Vec<InputFile>,
     /// `bounds = { min, max }`; `None`: the program's own bounds, found when it is contoured.
     pub bounds: Option<[[f64; 3]; 2]>,
     pub resolution: SdfResolution,
@@ -272,7 +273,7 @@ pub struct Scaffold {
 pub enum ScaffoldSource {
     /// A mesh file (`mesh = "…"`: Gmsh, VTK, Abaqus, OBJ/OFF); its element kind is known only
     /// once it is read.
-    Mesh(MeshFile),
+    Mesh(InputFile),
     /// A generated box (`grid = { … }`).
     Grid(ScaffoldGrid),
 }

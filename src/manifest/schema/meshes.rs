@@ -12,7 +12,7 @@ use std::collections::BTreeMap;
 
 use latticebuild_geom::spelling;
 
-use super::super::model::{Cell, CellSource, MeshCell, MeshFile, MeshSampling, Output};
+use super::super::model::{Cell, CellSource, InputFile, MeshCell, MeshSampling, Output};
 use super::{Checker, Fields, Value, list};
 
 /// File extensions of the mesh readers, lower case.
@@ -93,7 +93,7 @@ impl Checker<'_, '_, '_> {
         fields: &Fields<'_, '_>,
         over_element: bool,
         planar: bool,
-    ) -> (Option<Option<MeshFile>>, Option<Option<f64>>) {
+    ) -> (Option<Option<InputFile>>, Option<Option<f64>>) {
         let path = |k: &str| format!("outputs.{output}.{k}");
         let within = match fields.get("within") {
             None => Some(None),
@@ -146,7 +146,7 @@ impl Checker<'_, '_, '_> {
 
     /// A mesh file name: a non-empty string with a known extension, resolved against the
     /// manifest's directory.
-    fn mesh_file(&mut self, key: &str, value: &Value<'_>) -> Option<MeshFile> {
+    fn mesh_file(&mut self, key: &str, value: &Value<'_>) -> Option<InputFile> {
         let given = self.string(key, value)?;
         self.input_file(&format!("`{key}`"), given, value.span(), &MESH_FILES)
     }
@@ -160,7 +160,7 @@ impl Checker<'_, '_, '_> {
         given: &str,
         span: std::ops::Range<usize>,
         kind: &FileKind,
-    ) -> Option<MeshFile> {
+    ) -> Option<InputFile> {
         let extension = std::path::Path::new(given)
             .extension()
             .and_then(|e| e.to_str())
@@ -178,7 +178,7 @@ impl Checker<'_, '_, '_> {
             );
             return None;
         }
-        Some(MeshFile {
+        Some(InputFile {
             given: given.to_string(),
             path: self.root.join(given),
             span,

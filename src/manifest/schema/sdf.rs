@@ -20,7 +20,7 @@ use latticebuild_geom::sdf::{self as lang, Op, Origin, Program, SdfError, Word};
 use toml::de::DeValue;
 
 use super::super::expression;
-use super::super::model::{MeshFile, SdfOutput, SdfResolution, voxel_samples};
+use super::super::model::{InputFile, SdfOutput, SdfResolution, voxel_samples};
 use super::keys::{DOMAIN_KEYS, OUTPUT_KEYS};
 use super::meshes::MESH_FILES;
 use super::{Checker, Fields, Key, Value};
@@ -163,7 +163,7 @@ impl Checker<'_, '_, '_> {
     }
 
     /// The program of `sdf = "…"` and the mesh files it reads.
-    fn sdf_program(&mut self, key: &str, value: &Value<'_>) -> Option<(Program, Vec<MeshFile>)> {
+    fn sdf_program(&mut self, key: &str, value: &Value<'_>) -> Option<(Program, Vec<InputFile>)> {
         let text = self.string(key, value)?;
         let sources = self.report.sources();
         // Where the string's characters start in the source, when it spells them unchanged.
@@ -222,7 +222,7 @@ impl Checker<'_, '_, '_> {
                 return None;
             }
         };
-        let mut files: Vec<MeshFile> = Vec::new();
+        let mut files: Vec<InputFile> = Vec::new();
         let mut ok = true;
         for node in program.tree().nodes() {
             let (Op::File(given), Origin::Arg(n)) = (&node.op, &node.at.origin) else {
