@@ -25,12 +25,13 @@ mod imp {
     impl F4 {
         #[inline(always)]
         pub fn splat(x: f32) -> F4 {
-            // SAFETY (all of this impl): SSE is part of the x86_64 baseline.
+            // SAFETY: SSE is part of the x86_64 baseline; no memory is touched.
             F4(unsafe { _mm_set1_ps(x) })
         }
 
         #[inline(always)]
         pub fn new(a: [f32; LANES]) -> F4 {
+            // SAFETY: SSE is part of the x86_64 baseline; no memory is touched.
             F4(unsafe { _mm_setr_ps(a[0], a[1], a[2], a[3]) })
         }
 
@@ -44,6 +45,7 @@ mod imp {
         /// `a` where `pick`, else `b`, without a branch.
         #[inline(always)]
         pub fn select(pick: bool, a: F4, b: F4) -> F4 {
+            // SAFETY: SSE is part of the x86_64 baseline; no memory is touched.
             unsafe {
                 let mask = _mm_castsi128_ps(_mm_set1_epi32(-i32::from(pick)));
                 F4(_mm_or_ps(_mm_and_ps(mask, a.0), _mm_andnot_ps(mask, b.0)))
@@ -52,18 +54,21 @@ mod imp {
 
         #[inline(always)]
         pub fn max(self, b: F4) -> F4 {
+            // SAFETY: SSE is part of the x86_64 baseline; no memory is touched.
             F4(unsafe { _mm_max_ps(self.0, b.0) })
         }
 
         /// Bit `i` set where lane `i` of `self` is below that of `b`.
         #[inline(always)]
         pub fn lt_mask(self, b: F4) -> u32 {
+            // SAFETY: SSE is part of the x86_64 baseline; no memory is touched.
             (unsafe { _mm_movemask_ps(_mm_cmplt_ps(self.0, b.0)) }) as u32
         }
 
         /// The least lane among those below `b`'s; `INFINITY` when there is none.
         #[inline(always)]
         pub fn min_where_lt(self, b: F4) -> f32 {
+            // SAFETY: SSE is part of the x86_64 baseline; no memory is touched.
             unsafe {
                 let open = _mm_cmplt_ps(self.0, b.0);
                 let m = _mm_or_ps(
@@ -78,16 +83,19 @@ mod imp {
 
         #[inline(always)]
         pub(super) fn add(self, b: F4) -> F4 {
+            // SAFETY: SSE is part of the x86_64 baseline; no memory is touched.
             F4(unsafe { _mm_add_ps(self.0, b.0) })
         }
 
         #[inline(always)]
         pub(super) fn sub(self, b: F4) -> F4 {
+            // SAFETY: SSE is part of the x86_64 baseline; no memory is touched.
             F4(unsafe { _mm_sub_ps(self.0, b.0) })
         }
 
         #[inline(always)]
         pub(super) fn mul(self, b: F4) -> F4 {
+            // SAFETY: SSE is part of the x86_64 baseline; no memory is touched.
             F4(unsafe { _mm_mul_ps(self.0, b.0) })
         }
     }
