@@ -91,3 +91,83 @@ fn only_the_listed_modules_touch_the_filesystem() {
     );
     assert!(files.len() > 50, "found only {} sources", files.len());
 }
+
+/// The production lines of every source under `dir` that is not skipped, with their paths
+/// relative to `dir`.
+fn production_lines(dir: &Path) -> Vec<(String, usize, String)> {
+    let mut files = Vec::new();
+    sources(dir, &mut files);
+    let mut lines = Vec::new();
+    for path in &files {
+        let relative = path
+            .strip_prefix(dir)
+            .expect("under the directory")
+            .to_string_lossy()
+            .replace('\\', "/");
+        let text = std::fs::read_to_string(path).expect("read source");
+        let Some(code) = production_text(path, &text) else {
+            continue;
+        };
+        for (n, content) in code.lines().enumerate() {
+            if !content.trim_start().starts_with("//") {
+                lines.push((relative.clone(), n + 1, content.to_string()));
+            }
+        }
+    }
+    lines
+}
+
+/// The dependency layers: a module may use those below it, never those above.
+#[test]
+fn layers_point_one_way() {
+    // (modules, what they must not name)
+    let rules: [(&[&str], &[&str]); 4] = [
+        (
+            &["stages/", "graph/", "cache/", "manifest/"],
+            &["crate::build", "crate::commands", "crate::cli"],
+        ),
+        (&["build.rs"], &["crate::commands", "crate::cli"]),
+        (&["commands/"], &["crate::cli"]),
+        (
+            &["progress.rs", "diagnostics.rs", "report.rs"],
+            &["crate::commands", "crate::cli"],
+        ),
+    ];
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let lines = production_lines(&src);
+    let mut offenders = Vec::new();
+    for (modules, banned) in rules {
+        for (file, n, line) in &lines {
+            if modules.iter().any(|m| file.starts_with(m)) {
+                if let Some(name) = banned.iter().find(|b| line.contains(*b)) {
+                    offenders.push(format!("src/{file}:{n}: {name}"));
+                }
+            }
+        }
+    }
+    assert!(
+        offenders.is_empty(),
+        "imports against the layers docs/ARCHITECTURE.md draws:\n{}",
+        offenders.join("\n")
+    );
+}
+
+/// The geometry crate takes bytes and writes to any `io::Write`; it never opens a path.
+#[test]
+fn geometry_touches_no_file() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/geom/src");
+    let lines = production_lines(&src);
+    assert!(lines.len() > 10_000, "read only {} lines", lines.len());
+    let offenders: Vec<String> = lines
+        .iter()
+        .filter_map(|(file, n, line)| {
+            let call = FILE_CALLS.iter().find(|c| line.contains(*c))?;
+            Some(format!("crates/geom/src/{file}:{n}: {call}"))
+        })
+        .collect();
+    assert!(
+        offenders.is_empty(),
+        "filesystem calls in the geometry crate:\n{}",
+        offenders.join("\n")
+    );
+}

@@ -19,12 +19,14 @@
 //! Invariants:
 //! - Entries are whole or absent. They are written to a temporary file and renamed into place;
 //!   every `get` verifies length and blake3, and a corrupt entry is reported, removed and rebuilt.
-//! - Keys never include paths, mtimes or thread counts (the table in [`key`] lists what they do
-//!   include): the same work has the same key on every machine, which keeps a shared remote
-//!   [`Store`] possible.
+//! - Keys never include absolute paths, mtimes or thread counts (the table in [`key`] lists
+//!   what they do include; input files enter by the hash of their bytes, and the one path is
+//!   the write stage's output path relative to `out_dir`): the same work has the same key on
+//!   every machine, which keeps a shared remote [`Store`] possible.
 //! - One build per cache at a time: [`Cache`] holds an exclusive lock on `lock` for its lifetime.
 //!   Within that build, any number of threads may `get`/`put` concurrently.
-//! - Only the cache and the CLI touch the filesystem; stages are pure functions of bytes.
+//! - Stages never reach the cache's files: they are pure functions of bytes, and the builder
+//!   moves those bytes in and out of here.
 //! - A corrupt or foreign cache directory is never a panic: at worst a miss or a [`CacheError`].
 
 mod atomic;

@@ -1,7 +1,9 @@
 //! The stage DAG: compiled from a validated [`Manifest`], ordered, and printed.
 //!
 //! Invariants:
-//! - The graph never runs geometry and never touches files; [`crate::build`] executes it.
+//! - The graph never runs geometry and never opens a file itself ([`status`] reads cache
+//!   entries and output files' metadata through `cache/` and the `OutputSink`);
+//!   [`crate::build`] executes it.
 //! - Node ids are stable strings (`cell:gyroid`, `contour:g`, `write:g`) that depend only on
 //!   the manifest's names, so cache records and `-v` explanations follow a node across edits.
 //! - Nodes are stored in a topological order: every node comes after all of its inputs.
