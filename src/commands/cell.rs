@@ -1,7 +1,8 @@
 //! `latticebuild cell MANIFEST NAME`: a fitted cell's coefficients, constraint and values, as
 //! JSON (`--json`) or as a readable table of its largest terms.
 //!
-//! Conventions (METHOD.md): coefficients are `c_f = ⟨g, φ_f⟩` in centred coordinates, with
+//! Conventions (docs/method.md §Conjugation): coefficients are `c_f = ⟨g, φ_f⟩` in centred
+//! coordinates, with
 //! `f` in skew integer coordinates for D3; points are in the cell's Cartesian reference frame
 //! (centroid at the origin, cell size 1); `value` is Re Φ and `gradient` its Cartesian gradient.
 

@@ -129,7 +129,8 @@ pub enum MinkowskiOp {
     Difference,
 }
 
-/// How a cell is fitted, constrained and adjusted (METHOD.md; the sample → fit → constrain
+/// How a cell is fitted, constrained and adjusted (docs/method.md §Overview; the sample → fit →
+/// constrain
 /// stages). Validation guarantees the group is known (or its generators close to a finite
 /// group of at most 1000 elements) and `n` is even and at least 4.
 #[derive(Clone, Debug, PartialEq)]
@@ -140,7 +141,8 @@ pub struct Symmetric {
     pub mirror: bool,
     /// Replace the source by the union of its group images before fitting.
     pub symmetrize: bool,
-    /// Constrain the cell to meet its element's faces at right angles (METHOD.md §6).
+    /// Constrain the cell to meet its element's faces at right angles
+    /// (docs/method.md §Face-normal condition).
     pub normal_to_faces: bool,
     /// Dilation (positive grows the solid) in cell units: Φ − offset.
     pub offset: f64,

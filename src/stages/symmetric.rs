@@ -1,4 +1,5 @@
-//! The stages of symmetric Fourier cells (METHOD.md): `sample` → `fit` → `constrain`, and the
+//! The stages of symmetric Fourier cells (docs/method.md §Overview): `sample` → `fit` →
+//! `constrain`, and the
 //! combinations `blend` and `minkowski`.
 //!
 //! Payloads: `sample` stores the raw samples (`LBSAMP01`, N and dimension, then `N^d` f64);
@@ -295,7 +296,8 @@ impl CombineStage {
     }
 }
 
-/// `constrain`: the face-normal condition (METHOD.md §6), then offset and inversion.
+/// `constrain`: the face-normal condition (docs/method.md §Face-normal condition), then offset and
+/// inversion.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ConstrainStage {
     pub spec: Symmetric,

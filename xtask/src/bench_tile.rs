@@ -1,6 +1,8 @@
 //! `cargo xtask bench-tile [--resolution N] [--formats stl,ply] [--keep]`: tiling end to end,
 //! through the release binary, as a user runs it: a Td-fitted Schwarz P tiled into the Gmsh
-//! brackets of `../shared/data/scaffolds` (9,627 and 98,228 tet4). Each timed build reruns the
+//! brackets of `data/scaffolds` (9,627 and 98,228 tet4) in the shared folder outside the
+//! repository (`$LATTICEBUILD_SHARED`, default `shared` beside the checkout; a bracket not found
+//! there is skipped with a message). Each timed build reruns the
 //! tile and write stages (a new offset; the fitted cell stays cached), so it measures reading
 //! the scaffold, tiling, checking the mesh, streaming the cache entry and writing the files.
 //!
@@ -50,11 +52,11 @@ fn options(args: &[String]) -> Result<Options, String> {
     Ok(o)
 }
 
-fn manifest(o: &Options) -> String {
+fn manifest(o: &Options, scaffolds: &[(&str, &str)]) -> String {
     let formats: Vec<String> = o.formats.iter().map(|f| format!("\"{f}\"")).collect();
     let mut text =
         String::from("[cells.p_td]\ntpms = \"p\"\nsymmetry = \"Td\"\nfit = { n = 32 }\n");
-    for (name, file) in SCAFFOLDS {
+    for (name, file) in scaffolds {
         text += &format!("\n[scaffolds.{name}]\nmesh = \"{file}\"\n");
         text += &format!(
             "\n[outputs.{name}]\nscaffold = \"{name}\"\ncell = \"p_td\"\noffset = 0.2\n\
@@ -113,18 +115,31 @@ fn stage_seconds(report: &serde_json::Value, prefix: &str) -> f64 {
 
 pub fn run(args: &[String]) -> Result<(), String> {
     let o = options(args)?;
-    let root = super::root();
+    let data = super::shared_dir().join("data/scaffolds");
+    let (found, missing): (Vec<_>, Vec<_>) = SCAFFOLDS
+        .iter()
+        .copied()
+        .partition(|s| data.join(s.1).is_file());
+    for (name, file) in missing {
+        println!(
+            "{name} skipped: {} not found (the brackets live outside the repository; set \
+             LATTICEBUILD_SHARED to the folder holding data/scaffolds)",
+            data.join(file).display()
+        );
+    }
+    if found.is_empty() {
+        return Ok(());
+    }
     let bin = super::release_binary()?;
-    let data = root.join("../shared/data/scaffolds");
     let dir = std::env::temp_dir().join(format!("latticebuild-bench-tile-{}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    for (_, file) in SCAFFOLDS {
+    for (_, file) in &found {
         std::fs::copy(data.join(file), dir.join(file))
             .map_err(|e| format!("cannot copy {}: {e}", data.join(file).display()))?;
     }
-    std::fs::write(dir.join("lattice.toml"), manifest(&o)).map_err(|e| e.to_string())?;
+    std::fs::write(dir.join("lattice.toml"), manifest(&o, &found)).map_err(|e| e.to_string())?;
     // Fits the cell (and reads the small scaffold) once, untimed.
-    timed(&bin, &dir, &["build", "lattice.toml", SCAFFOLDS[0].0, "-q"])?;
+    timed(&bin, &dir, &["build", "lattice.toml", found[0].0, "-q"])?;
     // So that each scaffold's first timed build writes new files, and its second replaces them.
     let _ = std::fs::remove_dir_all(dir.join("out"));
     println!(
@@ -149,7 +164,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
     );
     // `new`: no file of that name yet; `replace`: the previous build's files are replaced,
     // which on a `discard` mount waits for the old file to be freed (about 0.2 s a GB).
-    let runs = SCAFFOLDS
+    let runs = found
         .iter()
         .flat_map(|(name, _)| [(*name, "new"), (*name, "replace")]);
     for (k, (name, files)) in runs.enumerate() {

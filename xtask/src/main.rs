@@ -56,6 +56,12 @@ fn root() -> PathBuf {
         .to_path_buf()
 }
 
+/// Material kept outside the repository (peer benchmark scripts, large scaffolds):
+/// `$LATTICEBUILD_SHARED`, by default `../shared` beside the checkout.
+fn shared_dir() -> PathBuf {
+    std::env::var_os("LATTICEBUILD_SHARED").map_or_else(|| root().join("../shared"), PathBuf::from)
+}
+
 fn run(cmd: &mut Command) -> Result<(), String> {
     let status = cmd
         .status()
@@ -223,8 +229,16 @@ fn bench(args: &[String]) -> Result<(), String> {
             other => return Err(format!("unknown bench argument `{other}`")),
         }
     }
+    let peer_dir = shared_dir().join("bench/peers");
+    if peers && !peer_dir.join("run.sh").is_file() {
+        println!(
+            "peers skipped: {} not found (the peer scripts live outside the repository; set \
+             LATTICEBUILD_SHARED to the folder holding bench/peers)",
+            peer_dir.join("run.sh").display()
+        );
+        peers = false;
+    }
     let bin = release_binary()?;
-    let peer_dir = root().join("../shared/bench/peers");
     let scratch = std::env::temp_dir().join(format!("latticebuild-bench-{}", std::process::id()));
     std::fs::create_dir_all(&scratch).map_err(|e| e.to_string())?;
     println!(

@@ -1,6 +1,7 @@
 //! Marching squares of a planar field clipped to a 2D reference element.
 //!
-//! Reference elements are those of `shared/docs/METHOD.md` §1, in Cartesian coordinates: the
+//! Reference elements are those of `docs/method.md` §Reference elements, in Cartesian coordinates:
+//! the
 //! square `[-½, ½]²` and the equilateral triangle of side 1 with centroid at the origin,
 //! pointing to +y, vertices `(-½, -√3/6)`, `(½, -√3/6)`, `(0, √3/3)`.
 //!
@@ -25,7 +26,7 @@
 //! Grids, chosen so that the element's sides are exact:
 //! - **Square**: `samples` points per axis spanning the square; its sides are the grid's
 //!   boundary, so the element clips itself and `Φ` is contoured as is.
-//! - **Triangle**: the grid is laid on the triangle's skew lattice (METHOD §1),
+//! - **Triangle**: the grid is laid on the triangle's skew lattice (docs/method.md §Frames),
 //!   `x = q0 + u e1 + v e2` with `q0 = (-½, -√3/6)`, `e1 = (1, 0)`, `e2 = (½, √3/2)`. Two sides
 //!   are the grid lines `u = 0` and `v = 0`; the third is the zero set of the linear clip
 //!   `c = u + v − 1`, combined with `Φ` as in 3D (the sign of `max(Φ, c)`, with node values
@@ -58,7 +59,7 @@ use crate::field::Band;
 use crate::mesh::{Mesh, inseparable_edge, round_inside};
 use rayon::prelude::*;
 
-/// A 2D reference element (METHOD §1), in Cartesian coordinates.
+/// A 2D reference element (docs/method.md §Reference elements), in Cartesian coordinates.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Element2 {
     /// `[-½, ½]²`.

@@ -1,6 +1,7 @@
 //! A field clipped to a 3D reference element, contoured as one closed mesh.
 //!
-//! Reference elements are those of `shared/docs/METHOD.md` §1: the cube `[-½, ½]³` and the
+//! Reference elements are those of `docs/method.md` §Reference elements: the cube `[-½, ½]³` and
+//! the
 //! regular tetrahedron inscribed in it with vertices `p0 = (-½,-½,-½)`, `p1 = (½,½,-½)`,
 //! `p2 = (-½,½,½)`, `p3 = (½,-½,½)`.
 //!
@@ -47,7 +48,7 @@ use crate::field::{Band, Grid, PlaneSampler, ScalarField};
 use crate::mesh::Mesh;
 use std::ops::Range;
 
-/// A 3D reference element (METHOD §1).
+/// A 3D reference element (docs/method.md §Reference elements).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Element3 {
     /// `[-½, ½]³`.

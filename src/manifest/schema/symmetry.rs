@@ -1,4 +1,5 @@
-//! The schema of symmetric Fourier cells (METHOD.md §1–§2, §7): `symmetry`, `fit` and the other
+//! The schema of symmetric Fourier cells (docs/method.md §Symmetry groups to §Blends and
+//! Minkowski combinations): `symmetry`, `fit` and the other
 //! keys of a fitted cell, blends and Minkowski combinations, and outputs `over = "element"`.
 //!
 //! A child of `schema.rs` (it extends its `Checker`), in a file of its own because cells are

@@ -7,7 +7,8 @@
 //! that draws the surface (see [`table`]).
 //!
 //! Why our own: no crate is both streaming (never holding the N³ grid) and watertight with
-//! shared vertices and caps; see `shared/docs/CRATES.md`.
+//! shared vertices and caps: the extractors we measured hold the whole grid, are f32-only or
+//! abandoned, or (surface nets) leave non-manifold edges on thin sheets.
 //!
 //! Invariants:
 //! - Memory: a chunk holds two planes of samples and vertex ids at a time, so memory grows

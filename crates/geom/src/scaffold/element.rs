@@ -1,7 +1,8 @@
 //! The ten element kinds of a scaffold: reference elements, Gmsh node orders, shape functions.
 //!
 //! Invariants:
-//! - The reference elements are the cell domains of METHOD.md §1 (centre 0, size 1): the cube
+//! - The reference elements are the cell domains of docs/method.md §Reference elements (centre 0,
+//!   size 1): the cube
 //!   and square [-½,½]^d, the tetrahedron p0=(-½,-½,-½), p1=(½,½,-½), p2=(-½,½,½), p3=(½,-½,½),
 //!   and the equilateral triangle of side 1 with its centroid at 0, pointing to +y. A cell's
 //!   reference domain is therefore exactly an element's reference element.
@@ -38,7 +39,7 @@ const TRI: [[f64; 3]; 3] = [
     [0.5, -SQRT3 / 6.0, 0.0],
     [0.0, SQRT3 / 3.0, 0.0],
 ];
-/// Corners of the reference tetrahedron (METHOD.md §1).
+/// Corners of the reference tetrahedron (docs/method.md §Reference elements).
 const TET: [[f64; 3]; 4] = [
     [-0.5, -0.5, -0.5],
     [0.5, 0.5, -0.5],

@@ -1,4 +1,5 @@
-//! Scaffold meshes: the unstructured meshes a lattice is tiled into (METHOD.md §8, DESIGN.md §4).
+//! Scaffold meshes: the unstructured meshes a lattice is tiled into (docs/method.md §Element maps,
+//! §Tiling and continuity).
 //!
 //! A [`Scaffold`] is a mesh of one [`ElementKind`] (tri3/tri6, quad4/quad8/quad9, tet4/tet10,
 //! hex8/hex20/hex27) in Gmsh's local node order, read from bytes ([`read_scaffold`]: Gmsh

@@ -1,4 +1,4 @@
-//! Automatic choice of the FFT size `N` (METHOD.md §4, `n = "auto"`).
+//! Automatic choice of the FFT size `N` (docs/method.md §Choosing N, `n = "auto"`).
 //!
 //! [`fit_auto`] fits at `N = 32, 64, 128, …` (at most `max_n`) and stops at the first `N`
 //! whose next doubling moves the fitted zero set less than `tolerance`; it returns that

@@ -1,4 +1,5 @@
-//! Combining cells of one group: weighted averages and Minkowski sum/difference (METHOD.md §7).
+//! Combining cells of one group: weighted averages and Minkowski sum/difference (docs/method.md
+//! §Blends and Minkowski combinations).
 //!
 //! - Weighted average: cells share a basis, so the blend is the weighted average of their
 //!   coefficient vectors (weights normalised by their sum). Linear in the inputs: the average

@@ -1,4 +1,5 @@
-//! The face-normal constraint (METHOD.md §6): the smallest change of the coefficients that
+//! The face-normal constraint (docs/method.md §Face-normal condition): the smallest change of the
+//! coefficients that
 //! makes `∇Φ·n = 0` on the faces of the reference element.
 //!
 //! Conventions and math:
@@ -27,7 +28,8 @@
 //!   other are proportional) and, after merging those, has a tail of small singular values
 //!   from frequencies near the corner of the band (σ_min/σ_max ≈ 3e-3, 5e-4, 6e-5 at N = 16,
 //!   32, 64 for Td), so forming `CCᴴ` (normal / KKT equations) would square that condition
-//!   number. METHOD.md §6 asks for an SVD or a complete orthogonal decomposition; for Td
+//!   number. An SVD or a complete orthogonal decomposition would do (docs/method.md §Departures);
+//!   for Td
 //!   those are dense and grow like `N⁷` (8 minutes at N = 64). `row_space.rs` computes the
 //!   same projection with LSQR (Golub–Kahan bidiagonalization of `Cᴴ`, the process an SVD
 //!   starts with; no normal equations), checked against a dense projection in its tests and
@@ -346,7 +348,8 @@ impl FittedCell {
             .fold(0.0, f64::max))
     }
 
-    /// The face-normal constraint of METHOD.md §6 (see the module docs): the cell with the
+    /// The face-normal constraint of docs/method.md §Face-normal condition (see the module docs):
+    /// the cell with the
     /// least Hermitian change `‖c′ − c‖` such that `∇Φ·n = 0` on the faces of the
     /// reference element, and a report. Returns the cell unchanged (`applied == false`) when
     /// the conditions already hold (D4, Oh, mirrored D3).

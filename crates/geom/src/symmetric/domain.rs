@@ -1,4 +1,5 @@
-//! Sampling a source on the periodic domain, with the simplex extensions of METHOD.md §5.
+//! Sampling a source on the periodic domain, with the simplex extensions of docs/method.md
+//! §Mirroring.
 //!
 //! Conventions:
 //! - Sources are evaluated in the REFERENCE frame: Cartesian coordinates in which the cell has
@@ -14,7 +15,7 @@
 //! - `Extend::None` samples the source as it is on the whole domain.
 //! - Symmetrization replaces `g` by `min_Q g(Q x)` (the union of the images) before the
 //!   extension is applied.
-//! - Known limitation (METHOD.md §5), not hidden: the mirrored cube of a Td cell is
+//! - Known limitation (docs/method.md §Mirroring), not hidden: the mirrored cube of a Td cell is
 //!   continuous inside the cube but its periodic extension jumps across the cube faces, which
 //!   hold the tetrahedron's edges, so Td fits ring near the edges and vertices of T. The
 //!   mirrored rhombus of a D3-symmetric cell has no such jump.
@@ -68,7 +69,7 @@ impl<F: Fn([f64; 3]) -> f64 + Sync> Source for FnSource<F> {
 /// How a simplex cell (Td, D3) fills the rest of its sampling domain.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Extend {
-    /// Mirror the cell across its faces (edges) — METHOD.md §5.
+    /// Mirror the cell across its faces (edges) — docs/method.md §Mirroring.
     #[default]
     Mirror,
     /// Sample the source as it is on the whole domain.

@@ -1,6 +1,6 @@
 //! Fitting a source onto the symmetric basis by FFT, and the fitted cell.
 //!
-//! Conventions (METHOD.md §4):
+//! Conventions (docs/method.md §Fitting by FFT, §Conjugation):
 //! - `ĝ(k) = (1/N^d) · DFT[k mod N] · exp(−2πi k·x_0)`: the Fourier coefficient of the
 //!   sampled field on the domain, corrected for the domain's lower corner `x_0` (a sign
 //!   `(−1)^(kx+ky+kz)` on the cube, a cube root of unity on the rhombus).

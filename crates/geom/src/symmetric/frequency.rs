@@ -1,10 +1,10 @@
 //! Frequency orbits, canonical representatives and band-limited frequency sets.
 //!
-//! Conventions (METHOD.md §3–§4):
+//! Conventions (docs/method.md §Frequency sets, §Conjugation):
 //! - Frequencies are integer vectors in the group's frame (skew for D3); `Q` acts on them by
 //!   its transpose, `f ↦ Qᵀ f`. 2D frequencies carry a zero third component.
 //! - The representative of an orbit is its lexicographically largest member. For the named
-//!   groups this is exactly METHOD.md's choice: Oh `fx ≥ fy ≥ fz ≥ 0`, Td `fx ≥ fy ≥ |fz|`,
+//!   groups this is docs/method.md's (§Frequency sets): Oh `fx ≥ fy ≥ fz ≥ 0`, Td `fx ≥ fy ≥ |fz|`,
 //!   D4 `fx ≥ fy ≥ 0`, D3 `f1 ≥ f2 ≥ 0`; named groups enumerate those inequalities directly.
 //! - Band: a representative is kept for grid size `N` only if every member `k` of its orbit
 //!   has `|k_i| < N/2` on every axis (the Nyquist frequency is dropped). For the cubic groups

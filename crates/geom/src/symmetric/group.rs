@@ -1,6 +1,6 @@
 //! Point groups as integer matrices, their frames, reference elements and sampling domains.
 //!
-//! Conventions (METHOD.md §1–§2):
+//! Conventions (docs/method.md §Reference elements, §Symmetry groups):
 //! - An element `Q` acts on positions about the cell centre, `x ↦ Q x`, in the coordinates of the
 //!   group's [`Frame`]: Cartesian for D4, Oh and Td; skew (hexagonal) for D3, where
 //!   `x = s1·e1 + s2·e2`, `e1 = (1, 0)`, `e2 = (½, √3/2)`. A symmetric field satisfies
@@ -103,7 +103,8 @@ pub enum ReferenceElement {
     Square,
     /// `[-½, ½]³`.
     Cube,
-    /// The regular tetrahedron of METHOD.md §1 (edge √2) inscribed in the cube.
+    /// The regular tetrahedron of docs/method.md §Reference elements (edge √2) inscribed in the
+    /// cube.
     Tetrahedron,
     /// The equilateral triangle of side 1 pointing to +y.
     Triangle,

@@ -1,5 +1,5 @@
 //! Symmetric Fourier unit cells (Chen, Kabaria & Lew 2025, with the corrections of
-//! `shared/docs/METHOD.md`).
+//! `docs/method.md` §Departures).
 //!
 //! A cell is `Φ(x) = Re Σ_{f∈F} c_f φ_f(x)` with `φ_f(x) = K_f Σ_{Q∈S} exp(2πi fᵀQx)`: a
 //! trigonometric polynomial invariant under a point group `S` (`Φ(Qx) = Φ(x)`), negative inside.
@@ -16,7 +16,7 @@
 //!   (private `sampler` module), so the contourer can mesh rich fits.
 //! - [`blend`] — weighted averages and Minkowski sum/difference.
 //! - [`constrain`] — the face-normal constraint `∇Φ·n = 0` on the reference element's faces
-//!   (METHOD.md §6): a least-change projection of the coefficients
+//!   (docs/method.md §Face-normal condition): a least-change projection of the coefficients
 //!   (`row_space.rs`: LSQR on the sparse constraint rows).
 //! - [`auto`] — automatic `N`: double until the zero set moves less than a tolerance.
 //! - `fft` (private) — realfft along x (contiguous), rustfft along y and z, rayon across

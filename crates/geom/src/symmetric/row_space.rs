@@ -1,5 +1,6 @@
 //! Orthogonal projection onto the row space of a sparse complex matrix, for the face-normal
-//! constraint (METHOD.md §6): `P x = C⁺C x`, the part of `x` that the least-norm change
+//! constraint (docs/method.md §Face-normal condition): `P x = C⁺C x`, the part of `x` that the
+//! least-norm change
 //! `x′ = x − P x` with `C x′ = 0` removes.
 //!
 //! Method and why:
@@ -7,7 +8,8 @@
 //!   `r = x − Cᴴ y` is the projected vector. `y` is found by LSQR (Paige & Saunders 1982), i.e.
 //!   Golub–Kahan bidiagonalization of `Cᴴ` started from `x` — the same process a dense SVD
 //!   begins with, so the condition number is that of `C`, not of `CCᴴ` (no normal equations).
-//!   METHOD.md §6 asks for an SVD or a complete orthogonal decomposition; those are dense and
+//!   An SVD or a complete orthogonal decomposition would do (docs/method.md §Departures); those are
+//!   dense and
 //!   cost `O(rows²·cols)`, which for Td grows like `N⁷` (≈ 8 minutes at N = 64), while LSQR
 //!   costs a few hundred sparse products (`O(N³)` each). See docs/ARCHITECTURE.md.
 //! - `C` is rank-deficient (rows of lines related by a face symmetry are proportional): LSQR

@@ -22,7 +22,7 @@ pub trait Lattice: Sync {
     fn index_len(&self) -> usize;
     /// Whether index `p` is a lattice point.
     fn is_point(&self, p: u32) -> bool;
-    /// Reference coordinates of point `p` (METHOD.md §1 elements).
+    /// Reference coordinates of point `p` (docs/method.md §Reference elements).
     fn xi(&self, p: u32) -> [f64; 3];
     /// One fixed member of `p`'s orbit under the element's group.
     fn representative(&self, p: u32) -> u32;

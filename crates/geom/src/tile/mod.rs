@@ -1,7 +1,8 @@
 //! Tiling a cell into every element of an unstructured scaffold, as one welded mesh.
 //!
 //! The lattice inside element `e` is `{X_e(ξ) : Φ(ξ) < 0}` for the cell's implicit function
-//! `Φ` in reference coordinates (METHOD.md §1 elements, §8 tiling). How it is made exact:
+//! `Φ` in reference coordinates (docs/method.md §Reference elements, §Tiling and continuity). How
+//! it is made exact:
 //!
 //! 1. **One symmetric reference sampling.** `Φ` is sampled once on the element's reference
 //!    lattice ([`lattice`]) — and only at one representative point per orbit of the
@@ -76,7 +77,8 @@ pub trait ElementMap: Sync {
 }
 
 /// The elements to tile: their shape, and for each element the global node ids of its corners
-/// in the reference element's corner order (hex: Gmsh's; tetrahedron: METHOD.md's `p0..p3`).
+/// in the reference element's corner order (hex: Gmsh's; tetrahedron: `p0..p3` of docs/method.md
+/// §Reference elements).
 pub struct Elements<'a> {
     pub shape: Element3,
     pub corners: &'a [u32],

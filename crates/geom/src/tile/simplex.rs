@@ -1,5 +1,6 @@
 //! The tetrahedron's lattice: points with barycentric coordinates `a/m` (`a ∈ ℕ⁴`,
-//! `Σ a = m`), i.e. `ξ = Σ a_i p_i / m` over METHOD.md's vertices `p_i`, contoured by marching
+//! `Σ a = m`), i.e. `ξ = Σ a_i p_i / m` over the vertices `p_i` of
+//! docs/method.md §Reference elements, contoured by marching
 //! tetrahedra over the standard subdivision of the tetrahedron into `m³` small cells (upward
 //! tetrahedra, octahedra split into four along one diagonal, downward tetrahedra).
 //!

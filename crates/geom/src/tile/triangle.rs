@@ -1,5 +1,6 @@
 //! The triangle's lattice: points with barycentric coordinates `a/m` (`a ∈ ℕ³`, `Σ a = m`),
-//! i.e. `ξ = Σ a_i q_i / m` over the reference triangle's corners `q_i` (METHOD.md §1: side 1,
+//! i.e. `ξ = Σ a_i q_i / m` over the reference triangle's corners `q_i`
+//! (docs/method.md §Reference elements: side 1,
 //! centroid at 0, pointing to +y; Gmsh's corner order), contoured by marching triangles over
 //! the standard subdivision into `m²` small triangles (upward and downward).
 //!

@@ -1080,7 +1080,8 @@ mod tests {
     }
 
     /// The structural weld gives the name weld's mesh bit for bit on the bundled copies of
-    /// ../shared/data/scaffolds (CI has only the repository; seven element kinds), whole or in
+    /// the Gmsh-made scaffolds in examples/scaffolds (CI has only the repository; seven element
+    /// kinds), whole or in
     /// chunks, and pairs shared vertices itself.
     #[test]
     fn structural_weld_equals_the_name_weld_on_every_scaffold() {
