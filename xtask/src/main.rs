@@ -82,7 +82,9 @@ fn release_binary() -> Result<PathBuf, String> {
         "--bin",
         "latticebuild",
     ]))?;
-    Ok(root().join("target/release/latticebuild"))
+    let target =
+        std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root().join("target"), PathBuf::from);
+    Ok(target.join("release/latticebuild"))
 }
 
 /// Runs the golden tests; with `--bless`, rewrites their expected files first.
