@@ -41,6 +41,13 @@ pub(crate) use keys::expects_string;
 use keys::{BUILD_KEYS, DOMAIN_KEYS, OUTPUT_KEYS, TOP_KEYS};
 
 type Key<'i> = Spanned<DeString<'i>>;
+
+/// What [`Checker::written_files`] reads: the files an output writes, in the model's terms.
+struct WrittenFiles {
+    formats: Vec<Format>,
+    encoding: Encoding,
+    stem: String,
+}
 type Value<'i> = Spanned<DeValue<'i>>;
 
 /// The length units `[build] units` accepts: what the model's numbers mean (reports echo it).
@@ -385,21 +392,7 @@ impl Checker<'_, '_, '_> {
             ),
         };
         let samples = self.samples(name, &header, &within, &fields, domain.as_ref(), planar);
-        let formats = self.formats(&path("formats"), fields.get("formats"));
-        let encoding = match fields.get("ascii") {
-            None => Some(Encoding::Binary),
-            Some((_, v)) => self.boolean(&path("ascii"), v).map(|ascii| {
-                if ascii {
-                    Encoding::Ascii
-                } else {
-                    Encoding::Binary
-                }
-            }),
-        };
-        let stem = match fields.get("path") {
-            None => Some(name.to_string()),
-            Some((_, v)) => self.stem(&path("path"), v),
-        };
+        let written = self.written_files(name, &fields);
         let (within, skin) = self.within(name, &fields, over_element, planar);
         let islands = self.islands(name, &fields, planar);
 
@@ -413,6 +406,7 @@ impl Checker<'_, '_, '_> {
             cell_size[2] = 1.0;
             samples[2] = 2;
         }
+        let written = written?;
         Some(Output {
             name: self.name(key),
             cell: cell?,
@@ -424,9 +418,9 @@ impl Checker<'_, '_, '_> {
             solid: solid?,
             sizing: sizing?,
             samples,
-            formats: formats?,
-            encoding: encoding?,
-            stem: stem?,
+            formats: written.formats,
+            encoding: written.encoding,
+            stem: written.stem,
             within: within?,
             skin: skin?,
             islands: islands?,
@@ -720,6 +714,31 @@ impl Checker<'_, '_, '_> {
             &format!("gives more than {MAX_SAMPLES} samples along {}", AXES[axis]),
             Some("samples per axis are ceil(extent / voxel) + 1"),
         );
+    }
+
+    /// `formats`, `ascii` and `path`: which files an output writes, and where.
+    fn written_files(&mut self, output: &str, fields: &Fields<'_, '_>) -> Option<WrittenFiles> {
+        let path = |k: &str| format!("outputs.{output}.{k}");
+        let formats = self.formats(&path("formats"), fields.get("formats"));
+        let encoding = match fields.get("ascii") {
+            None => Some(Encoding::Binary),
+            Some((_, v)) => self.boolean(&path("ascii"), v).map(|ascii| {
+                if ascii {
+                    Encoding::Ascii
+                } else {
+                    Encoding::Binary
+                }
+            }),
+        };
+        let stem = match fields.get("path") {
+            None => Some(output.to_string()),
+            Some((_, v)) => self.stem(&path("path"), v),
+        };
+        Some(WrittenFiles {
+            formats: formats?,
+            encoding: encoding?,
+            stem: stem?,
+        })
     }
 
     fn formats(

@@ -22,7 +22,6 @@ use std::ops::Range;
 use std::path::PathBuf;
 
 use latticebuild_geom::field::Solid;
-use latticebuild_geom::mesh_io::Encoding;
 use latticebuild_geom::scaffold::ElementKind;
 use latticebuild_geom::spelling;
 use toml::de::DeValue;
@@ -410,21 +409,7 @@ impl Checker<'_, '_, '_> {
             Some((_, v)) => self.positive_number(&path("skin"), v, "a number").map(Some),
         };
         let thicken = self.thicken(name, &fields, grid_element);
-        let formats = self.formats(&path("formats"), fields.get("formats"));
-        let encoding = match fields.get("ascii") {
-            None => Some(Encoding::Binary),
-            Some((_, v)) => self.boolean(&path("ascii"), v).map(|ascii| {
-                if ascii {
-                    Encoding::Ascii
-                } else {
-                    Encoding::Binary
-                }
-            }),
-        };
-        let stem = match fields.get("path") {
-            None => Some(name.to_string()),
-            Some((_, v)) => self.stem(&path("path"), v),
-        };
+        let written = self.written_files(name, &fields);
         // A 2D grid's region stays a surface unless thickened: its pieces have no volume.
         let region = grid_element.is_some_and(|e| e.dimension() == 2)
             && !THICKEN_KEYS.iter().any(|k| fields.contains_key(k));
@@ -434,6 +419,7 @@ impl Checker<'_, '_, '_> {
         }
         let (cell, transition, _) = cells?;
         let (solid, sizing, thickness, offset) = solid?;
+        let written = written?;
         Some(TiledOutput {
             name: self.name(key),
             scaffold: scaffold?.0,
@@ -446,9 +432,9 @@ impl Checker<'_, '_, '_> {
             resolution: resolution?,
             skin: skin?,
             thicken: thicken?,
-            formats: formats?,
-            encoding: encoding?,
-            stem: stem?,
+            formats: written.formats,
+            encoding: written.encoding,
+            stem: written.stem,
             islands: islands?,
         })
     }

@@ -117,35 +117,22 @@ impl Checker<'_, '_, '_> {
             Some((_, v)) => self.sdf_bounds(&path("bounds"), v).map(Some),
         };
         let resolution = self.sdf_resolution(name, &within, &fields, bounds.flatten());
-        let formats = self.formats(&path("formats"), fields.get("formats"));
-        let encoding = match fields.get("ascii") {
-            None => Some(latticebuild_geom::mesh_io::Encoding::Binary),
-            Some((_, v)) => self.boolean(&path("ascii"), v).map(|ascii| {
-                if ascii {
-                    latticebuild_geom::mesh_io::Encoding::Ascii
-                } else {
-                    latticebuild_geom::mesh_io::Encoding::Binary
-                }
-            }),
-        };
-        let stem = match fields.get("path") {
-            None => Some(name.to_string()),
-            Some((_, v)) => self.stem(&path("path"), v),
-        };
+        let written = self.written_files(name, &fields);
         let islands = self.islands(name, &fields, false);
         if self.report.len() > before {
             return None;
         }
         let (program, files) = program?;
+        let written = written?;
         Some(SdfOutput {
             name: self.name(key),
             program,
             files,
             bounds: bounds?,
             resolution: resolution?,
-            formats: formats?,
-            encoding: encoding?,
-            stem: stem?,
+            formats: written.formats,
+            encoding: written.encoding,
+            stem: written.stem,
             islands: islands?,
         })
     }
