@@ -9,7 +9,6 @@ const TOUCH_FILES: &[&str] = &[
     "files.rs",
     "direct_file.rs",
     "interrupt.rs",
-    "deferred_free.rs",
     "build.rs",
     "budget.rs",
     "watch.rs",

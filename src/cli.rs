@@ -60,9 +60,6 @@ enum Command {
     Sdf(SdfArgs),
     /// Reconstruct the periodic surface through a crystal's atoms (CIF or extended XYZ)
     Crystal(crystal_command::CrystalArgs),
-    /// Internal: frees files a build renamed away (temporary names only), after it returned
-    #[command(hide = true)]
-    FreeFiles { paths: Vec<std::path::PathBuf> },
 }
 
 #[derive(Args, Debug, Clone)]
@@ -123,10 +120,6 @@ pub fn main() -> ExitCode {
         },
         Command::Sdf(args) => sdf_command::run(&args.words),
         Command::Crystal(args) => crystal_command::run(&args),
-        Command::FreeFiles { paths } => {
-            crate::deferred_free::free_files(&paths);
-            ExitCode::SUCCESS
-        }
     }
 }
 

@@ -67,9 +67,24 @@ pub(crate) fn compile(manifest: &Manifest) -> Result<Graph, Failure> {
     Graph::compile(manifest).map_err(|cycle| Failure::Usage(format!("error: {cycle}\n")))
 }
 
-/// Removes the temporary files that killed builds left among the outputs.
+/// Every file the manifest's outputs write (each format, a planar drawing, the report), as
+/// the writers name them: `out_dir` joined with the output's stem and extension.
+fn output_files(manifest: &Manifest) -> Vec<PathBuf> {
+    let outputs = (manifest.outputs.iter()).map(|(name, o)| (name, &o.stem, &o.formats));
+    let sdf = (manifest.sdf_outputs.iter()).map(|(name, o)| (name, &o.stem, &o.formats));
+    let tiled = (manifest.tiled_outputs.iter()).map(|(name, o)| (name, &o.stem, &o.formats));
+    let mut files = Vec::new();
+    for (name, stem, formats) in outputs.chain(sdf).chain(tiled) {
+        let extensions = formats.iter().map(|f| f.name()).chain(["svg"]);
+        files.extend(extensions.map(|ext| manifest.out_dir.join(format!("{stem}.{ext}"))));
+        files.push(manifest.out_dir.join(format!("{name}.report.json")));
+    }
+    files
+}
+
+/// Removes the temporary files that killed builds left of the manifest's output files.
 pub(crate) fn sweep_outputs(manifest: &Manifest, verbose: bool) {
-    for path in crate::files::sweep_stale_temporaries(&manifest::output_dirs(manifest)) {
+    for path in crate::files::sweep_stale_temporaries(&output_files(manifest)) {
         if verbose {
             eprintln!(
                 "  removed `{}`, left by an interrupted build",
