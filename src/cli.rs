@@ -143,7 +143,8 @@ fn run_cell(args: &CellArgs) -> Result<(), Failure> {
             args.name, args.name
         )));
     };
-    let group = crate::stages::symmetric::group_of(&spec.group).map_err(Failure::Build)?;
+    let group = crate::stages::symmetric::group_of(&spec.group)
+        .map_err(|e| Failure::Build(e.to_string()))?;
     let points = match &args.points {
         None => Vec::new(),
         Some(path) => {
@@ -163,8 +164,8 @@ fn run_cell(args: &CellArgs) -> Result<(), Failure> {
     let payload = Builder::new(&graph, &cache, &sink, &NoProgress)
         .build_node(node)
         .map_err(|e| Failure::Build(e.to_string()))?;
-    let fitted =
-        crate::stages::symmetric::FittedPayload::from_bytes(&payload).map_err(Failure::Build)?;
+    let fitted = crate::stages::symmetric::FittedPayload::from_bytes(&payload)
+        .map_err(|e| Failure::Build(e.to_string()))?;
     let report =
         crate::inspect::report(&args.name, &fitted, &group, &points).map_err(Failure::Build)?;
     if args.json {

@@ -76,7 +76,7 @@ pub fn report(
     group: &Group,
     points: &[[f64; 3]],
 ) -> Result<CellReport, String> {
-    let cell = payload.cell(group)?;
+    let cell = payload.cell(group).map_err(|e| e.to_string())?;
     let d = group.dimension();
     let coefficients = cell
         .coefficients()
