@@ -195,3 +195,62 @@ geometry_errors!(
     IslandError,
     ParseError
 );
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The texts users saw when these were strings, built as they were.
+    #[test]
+    fn the_texts_are_the_messages_they_replace() {
+        let io = || io::Error::new(io::ErrorKind::NotFound, "No such file or directory");
+        let cases = [
+            (
+                StageError::Unreadable {
+                    path: PathBuf::from("parts/a.stl"),
+                    source: io(),
+                },
+                format!("cannot read `parts/a.stl`: {}", io()),
+            ),
+            (
+                StageError::malformed("density table"),
+                "malformed density table payload".to_string(),
+            ),
+            (
+                StageError::Malformed {
+                    payload: "mesh",
+                    detail: Some("wrong magic".into()),
+                },
+                "malformed mesh payload: wrong magic".to_string(),
+            ),
+            (
+                StageError::geometry_of("the cell's mesh", TileError::Resolution(1)),
+                format!("the cell's mesh: {}", TileError::Resolution(1)),
+            ),
+            (
+                StageError::from(TileError::Resolution(1)),
+                TileError::Resolution(1).to_string(),
+            ),
+            (
+                StageError::Output {
+                    path: "out/a.stl".into(),
+                    source: io(),
+                },
+                format!("cannot write `out/a.stl`: {}", io()),
+            ),
+            (
+                StageError::Panicked("the cache writer"),
+                "the cache writer panicked".to_string(),
+            ),
+        ];
+        for (error, text) in cases {
+            assert_eq!(error.to_string(), text);
+        }
+        let parse = latticebuild_geom::expr::compile("x +").expect_err("does not compile");
+        let message = parse.message.clone();
+        assert_eq!(
+            StageError::geometry_of("cell formula does not compile", parse).to_string(),
+            format!("cell formula does not compile: {message}")
+        );
+    }
+}
