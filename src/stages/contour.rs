@@ -291,7 +291,9 @@ impl ContourStage {
             (mesh, None)
         };
         if mesh.is_empty() {
-            return Err(StageError::Unusable(self.why_empty(field, part.is_some())));
+            return Err(StageError::EmptySolid(
+                self.why_empty(field, part.is_some()),
+            ));
         }
         progress.phase("checking the mesh");
         let summary = MeshSummary::of_mesh(&mesh, planar.is_some());
@@ -506,7 +508,7 @@ impl ContourStage {
             }
             Some(ReferenceElement::Square) => planar(Element2::Square),
             Some(ReferenceElement::Triangle) => planar(Element2::Triangle),
-            None => Err(StageError::Unusable(format!(
+            None => Err(StageError::DoesNotFit(format!(
                 "group {} has no reference element to contour over",
                 group.name()
             ))),

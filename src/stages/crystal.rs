@@ -60,7 +60,7 @@ impl CrystalStage {
         )?;
         let r = &found.reconstruction;
         if !r.converged {
-            return Err(StageError::Unusable(format!(
+            return Err(StageError::NotConverged(format!(
                 "the surface through `{}` reaches a relative error of {:.3e} at scale {}, \
                  above the tolerance {:e}: raise `reconstruct.max_scale` or `tolerance`",
                 self.cell.file.given, r.metrics.max_error, self.cell.max_scale, options.tolerance
@@ -96,7 +96,7 @@ pub fn reconstruct_crystal(
     let present = crystal.species();
     if points.is_empty() {
         let what = species.map_or("atoms".to_string(), |s| format!("`{s}` atoms"));
-        return Err(StageError::Unusable(format!(
+        return Err(StageError::DoesNotFit(format!(
             "`{given}` has no {what}; its species are {}",
             present.join(", ")
         )));

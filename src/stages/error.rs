@@ -56,11 +56,23 @@ pub enum StageError {
         payload: &'static str,
         detail: Option<String>,
     },
-    /// The manifest's values give the stage nothing it can use, found only when it ran: an
-    /// empty solid, a graded value out of range at some node, a node-data view the scaffold
-    /// lacks, a reconstruction short of its tolerance. The message names the key or file.
+    /// The solid (or region, or surface) the manifest's values describe is empty: the cell has
+    /// no solid part at this offset or thickness, or the program no surface in the box.
     #[error("{0}")]
-    Unusable(String),
+    EmptySolid(String),
+    /// A manifest value is out of its range somewhere, found only when the stage evaluated it:
+    /// a graded thickness at a node, a volume fraction out of reach, too fine a voxel size.
+    /// The message names the key and where.
+    #[error("{0}")]
+    ValueOutOfRange(String),
+    /// A key or cell does not fit the input it applies to: a cell's group and the scaffold's
+    /// elements, `skin` or `extrude` on the wrong kind of scaffold, a node-data view the
+    /// scaffold lacks, a species the crystal lacks, `keep` on a planar region.
+    #[error("{0}")]
+    DoesNotFit(String),
+    /// A crystal's surface reconstruction stayed above its tolerance.
+    #[error("{0}")]
+    NotConverged(String),
     /// A stage was handed an input of a kind it does not take, or made an output of a shape
     /// the builder does not expect: a bug in how the graph was built, never the user's.
     #[error("{0}")]

@@ -69,7 +69,7 @@ impl IslandsStage {
     /// Filters a whole mesh (a contour's or an SDF program's, or a 2D tiling's).
     pub fn run(&self, artifact: &MeshArtifact) -> Result<MeshArtifact, IslandsFailure> {
         if artifact.planar.is_some() {
-            return Err(IslandsFailure::Failed(StageError::Unusable(format!(
+            return Err(IslandsFailure::Failed(StageError::DoesNotFit(format!(
                 "`outputs.{}` is a planar region: `keep` and `min_island_volume` apply only \
                  to solids (give the region a thickness, e.g. `extrude`, to make it one)",
                 self.output

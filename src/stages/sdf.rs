@@ -60,7 +60,7 @@ pub fn contour_field(
     progress.phase("contouring");
     let mesh = sdf::mesh_with_progress(field, &domain, counts, &|n| progress.advance(n))?;
     if mesh.is_empty() {
-        return Err(StageError::Unusable(format!(
+        return Err(StageError::EmptySolid(format!(
             "the solid has no surface in the box {}",
             box_text(&domain)
         )));
@@ -173,7 +173,7 @@ impl SdfStage {
         let samples = |domain: &Aabb| match self.resolution {
             SdfResolution::Counts(c) => Ok(c),
             SdfResolution::Voxel(h) => voxel_samples(domain.min, domain.max, h).map_err(|_| {
-                StageError::Unusable(format!(
+                StageError::ValueOutOfRange(format!(
                     "`voxel = {h}` gives too many samples for the box {}",
                     box_text(domain)
                 ))

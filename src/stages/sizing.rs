@@ -120,7 +120,7 @@ impl DensityStage {
                 match (over, group.reference_element()) {
                     (Over::Element, Some(element)) => Region::Element(element),
                     (Over::Element, None) => {
-                        return Err(StageError::Unusable(format!(
+                        return Err(StageError::DoesNotFit(format!(
                             "group {} has no reference element",
                             group.name()
                         )));
@@ -425,7 +425,7 @@ fn expression(value: &NodalValue) -> Result<Arc<dyn ScalarField>, StageError> {
             let compiled = expr::compile(text)?;
             Ok(Arc::new(compiled))
         }
-        NodalValue::NodeData(view) => Err(StageError::Unusable(format!(
+        NodalValue::NodeData(view) => Err(StageError::DoesNotFit(format!(
             "node data `{view}` belongs to a scaffold's nodes, and this output has none"
         ))),
     }
@@ -454,7 +454,7 @@ fn check_range(
     values.eval_points(&xs, &ys, &zs, &mut out);
     match out.iter().position(|&v| !allowed(v)) {
         None => Ok(()),
-        Some(i) => Err(StageError::Unusable(format!(
+        Some(i) => Err(StageError::ValueOutOfRange(format!(
             "the graded {what} is {} at ({}, {}, {}), but it must be {range} everywhere in the \
              domain",
             out[i], probes[i][0], probes[i][1], probes[i][2]

@@ -268,7 +268,7 @@ impl TileStage {
                 .map(|c| format!("`{c}`"))
                 .collect::<Vec<_>>()
                 .join(" and ");
-            return Err(StageError::Unusable(format!(
+            return Err(StageError::DoesNotFit(format!(
                 "{} has {} elements, which need a cell of group `{needed}`, but {cells} of \
                  `outputs.{}` {} group `{group}`",
                 self.source(),
@@ -278,14 +278,14 @@ impl TileStage {
             )));
         }
         match (kind.dimension(), self.thicken, self.skin) {
-            (2, _, Some(_)) => Err(StageError::Unusable(format!(
+            (2, _, Some(_)) => Err(StageError::DoesNotFit(format!(
                 "`outputs.{}.skin` does not apply to 2D scaffolds, but {} has {} elements: \
                  use `extrude = h` or `thickness_normal = h` to make the region a solid",
                 self.output,
                 self.source(),
                 kind.name()
             ))),
-            (3, Some(thicken), _) => Err(StageError::Unusable(format!(
+            (3, Some(thicken), _) => Err(StageError::DoesNotFit(format!(
                 "`outputs.{}.{}` applies only to 2D scaffolds (quad, tri), but {} has {} \
                  elements, which tile into a solid already",
                 self.output,
@@ -384,7 +384,7 @@ impl TileStage {
         .map_err(|e| StageError::geometry_of(format!("tiling {}", self.source()), e))?;
         let check = check.finish();
         if check.triangles == 0 {
-            return Err(StageError::Unusable(format!(
+            return Err(StageError::EmptySolid(format!(
                 "the tiled solid of `outputs.{}` is empty: the cell has no solid part at this \
                  offset or thickness",
                 self.output
@@ -480,7 +480,7 @@ impl TileStage {
                 let region =
                     tile_surface_scaffold(scaffold, solid, self.resolution).map_err(fail)?;
                 if !region.planar {
-                    return Err(StageError::Unusable(format!(
+                    return Err(StageError::DoesNotFit(format!(
                         "`outputs.{}.extrude` needs a planar scaffold (every node at one z), \
                          but {} is a curved surface of {} elements: use `thickness_normal = \
                          {h}` to thicken it along its normals",
@@ -502,7 +502,7 @@ impl TileStage {
             }
         };
         if region.mesh.is_empty() {
-            return Err(StageError::Unusable(format!(
+            return Err(StageError::EmptySolid(format!(
                 "the tiled region of `outputs.{}` is empty: the cell has no solid part at this \
                  offset or thickness",
                 self.output
@@ -562,7 +562,7 @@ impl TileStage {
                     } else {
                         format!("its views are {}", views.join(", "))
                     };
-                    return Err(StageError::Unusable(format!(
+                    return Err(StageError::DoesNotFit(format!(
                         "`{key}` reads node data `{view}`, but {} has no such view: {has}",
                         self.source()
                     )));
@@ -570,7 +570,7 @@ impl TileStage {
             },
         };
         if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-            return Err(StageError::Unusable(format!(
+            return Err(StageError::ValueOutOfRange(format!(
                 "`{key}` is {} at node {} of {}",
                 values[i],
                 scaffold.node_tags.get(i).copied().unwrap_or(i as u64),
@@ -670,7 +670,7 @@ impl TileStage {
                     Target::Graded(value) => {
                         let phis = self.nodal_values(scaffold, "volume_fraction", value)?;
                         if let Some(i) = phis.iter().position(|&p| !(p > 0.0 && p < 1.0)) {
-                            return Err(StageError::Unusable(format!(
+                            return Err(StageError::ValueOutOfRange(format!(
                                 "`outputs.{}.volume_fraction` is {} at node {} of {}, which \
                                  cannot be reached: the reachable range is 0 < \
                                  volume_fraction < 1",
@@ -700,7 +700,7 @@ impl TileStage {
     fn positive(&self, scaffold: &Scaffold, what: &str, values: &[f64]) -> Result<(), StageError> {
         match values.iter().position(|&v| v <= 0.0) {
             None => Ok(()),
-            Some(i) => Err(StageError::Unusable(format!(
+            Some(i) => Err(StageError::ValueOutOfRange(format!(
                 "`outputs.{}.{what}` must be greater than 0, but it is {} at node {} of {}",
                 self.output,
                 values[i],
