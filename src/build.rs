@@ -30,14 +30,18 @@ use rayon::prelude::*;
 use latticebuild_geom::mesh::MeshChunk;
 use latticebuild_geom::mesh_io::{Format, StlStream, Workers};
 
-use crate::cache::{Cache, CacheError, ContentHash, EntryReader, Key, Lookup, Opened, explain};
+use crate::cache::{
+    Cache, CacheError, ContentHash, EntryReader, Key, KeyDescription, Lookup, Opened, explain,
+};
 use crate::graph::{Graph, NodeId};
 use crate::progress::Progress;
 use crate::stages::chunked::{ChunkedMesh, ChunkedWriter, is_chunked};
 use crate::stages::islands::{IslandsFailure, IslandsStage};
 use crate::stages::tile::TileOutput;
 use crate::stages::write::{MeshInput, WriteError};
-use crate::stages::{MeshArtifact, OutputSink, PendingFile, Prewritten, Stage, WrittenOutput};
+use crate::stages::{
+    MeshArtifact, OutputSink, PendingFile, Prewritten, Stage, StageError, WrittenOutput,
+};
 
 /// A tile stage's inputs: its cells' payloads, the scaffold file's bytes, the density table.
 type TileInputs<'a> = (&'a [&'a [u8]], Option<&'a [u8]>, Option<&'a [u8]>);
@@ -69,8 +73,12 @@ pub struct OutputResult {
 pub enum BuildError {
     #[error(transparent)]
     Cache(#[from] CacheError),
-    #[error("stage `{node}` failed: {message}")]
-    Stage { node: String, message: String },
+    #[error("stage `{node}` failed: {error}")]
+    Stage {
+        node: String,
+        #[source]
+        error: StageError,
+    },
 }
 
 /// A node's payload, decoded, as held in memory during one build.
@@ -85,23 +93,22 @@ enum Value {
 
 /// Why running a node failed.
 enum Failure {
-    Message(String),
-    /// The chunked mesh of input `input` turned out corrupt while being read.
-    CorruptInput {
-        input: NodeId,
-        reason: String,
-    },
+    /// The stage failed: the build fails, naming the node.
+    Failed(StageError),
+    /// The chunked mesh of input `input` turned out corrupt while being read: the input is
+    /// rebuilt and the node run again.
+    CorruptInput { input: NodeId, reason: String },
 }
 
-impl From<String> for Failure {
-    fn from(message: String) -> Failure {
-        Failure::Message(message)
+impl From<StageError> for Failure {
+    fn from(error: StageError) -> Failure {
+        Failure::Failed(error)
     }
 }
 
-impl From<&str> for Failure {
-    fn from(message: &str) -> Failure {
-        Failure::Message(message.to_string())
+impl From<CacheError> for Failure {
+    fn from(error: CacheError) -> Failure {
+        Failure::Failed(error.into())
     }
 }
 
@@ -114,6 +121,42 @@ struct Prewriter<'scope> {
     node: NodeId,
     send: mpsc::SyncSender<Arc<MeshChunk>>,
     thread: std::thread::ScopedJoinHandle<'scope, Option<Box<dyn PendingFile>>>,
+}
+
+/// A write node's file written while its tiling ran, and the hash of the mesh it holds.
+struct WrittenEarly {
+    mesh: ContentHash,
+    file: Prewritten,
+}
+
+/// What the cache holds for a node this build needs.
+enum CacheStatus {
+    /// Up to date: its output hash, and its value when the lookup already loaded it (a write
+    /// node's record of its files).
+    Fresh {
+        hash: ContentHash,
+        value: Option<Value>,
+    },
+    /// No entry: the node runs; its record tells why.
+    Missing,
+    /// An entry that cannot be used (`why`): the node runs.
+    Stale { why: String },
+}
+
+/// A node of a level that must run, and what its lookup found instead.
+struct ToRun {
+    id: NodeId,
+    key: Key,
+    desc: KeyDescription,
+    /// Why its entry could not be used, when it had one.
+    stale: Option<String>,
+}
+
+/// How running a node of a level went.
+struct Ran {
+    node: ToRun,
+    result: Result<Value, Failure>,
+    seconds: f64,
 }
 
 struct Resolved {
@@ -132,7 +175,7 @@ pub struct Builder<'a> {
     /// The nodes this build resolves.
     needed: HashSet<NodeId>,
     /// Files written while a tiling ran, by write node, with the hash of the mesh they hold.
-    prewritten: Mutex<HashMap<NodeId, (ContentHash, Prewritten)>>,
+    prewritten: Mutex<HashMap<NodeId, WrittenEarly>>,
 }
 
 impl<'a> Builder<'a> {
@@ -196,7 +239,7 @@ impl<'a> Builder<'a> {
             Some(Value::Bytes(bytes)) => Ok((*bytes).clone()),
             _ => Err(BuildError::Stage {
                 node: self.graph.nodes[id].name.clone(),
-                message: "its payload is not a byte table".into(),
+                error: StageError::Internal("its payload is not a byte table".into()),
             }),
         }
     }
@@ -244,7 +287,7 @@ impl<'a> Builder<'a> {
             for store in stores {
                 store.join().map_err(|_| BuildError::Stage {
                     node: "cache".into(),
-                    message: "a cache write panicked".into(),
+                    error: StageError::Panicked("a cache write"),
                 })??;
             }
             outcome
@@ -272,10 +315,10 @@ impl<'a> Builder<'a> {
                 node.inputs.iter().map(|i| self.resolved[i].hash).collect();
             let (key, desc) = node.stage.key(&inputs).map_err(|e| BuildError::Stage {
                 node: node.name.clone(),
-                message: format!("cannot form its cache key: {e}"),
+                error: StageError::Key(e),
             })?;
             match self.lookup(id, &key)? {
-                Ok((hash, value)) => {
+                CacheStatus::Fresh { hash, value } => {
                     self.cache.record(&node.name, &key, &desc, &hash)?;
                     self.resolved.insert(id, Resolved { key, hash, value });
                     self.runs.insert(
@@ -289,31 +332,50 @@ impl<'a> Builder<'a> {
                         },
                     );
                 }
-                Err(reason) => to_run.push((id, key, desc, reason)),
+                CacheStatus::Missing => to_run.push(ToRun {
+                    id,
+                    key,
+                    desc,
+                    stale: None,
+                }),
+                CacheStatus::Stale { why } => to_run.push(ToRun {
+                    id,
+                    key,
+                    desc,
+                    stale: Some(why),
+                }),
             }
         }
-        for (id, ..) in &to_run {
-            for input in self.graph.nodes[*id].inputs.clone() {
+        for node in &to_run {
+            for input in self.graph.nodes[node.id].inputs.clone() {
                 self.load(input, store_mesh)?;
             }
         }
         let this = &*self;
-        let outcomes: Vec<_> = to_run
+        let outcomes: Vec<Ran> = to_run
             .into_par_iter()
-            .map(|(id, key, desc, reason)| {
+            .map(|node| {
                 let started = Instant::now();
-                let result = this.execute(id, &key);
-                (
-                    id,
-                    key,
-                    desc,
-                    reason,
+                let result = this.execute(node.id, &node.key);
+                Ran {
+                    node,
                     result,
-                    started.elapsed().as_secs_f64(),
-                )
+                    seconds: started.elapsed().as_secs_f64(),
+                }
             })
             .collect();
-        for (id, key, desc, reason, result, mut seconds) in outcomes {
+        for ran in outcomes {
+            let Ran {
+                node:
+                    ToRun {
+                        id,
+                        key,
+                        desc,
+                        stale,
+                    },
+                result,
+                mut seconds,
+            } = ran;
             let value = match result {
                 Ok(value) => value,
                 Err(Failure::CorruptInput { input, reason }) => {
@@ -328,7 +390,7 @@ impl<'a> Builder<'a> {
             };
             let node = &self.graph.nodes[id];
             let hash = self.store(&key, &value, store_mesh)?;
-            let mut why = reason.map_or_else(Vec::new, |r| vec![r]);
+            let mut why = stale.map_or_else(Vec::new, |r| vec![r]);
             if why.is_empty() {
                 why = match self.cache.previous(&node.name) {
                     Some(prev) if prev.key == key => vec!["its cache entry was missing".into()],
@@ -371,12 +433,15 @@ impl<'a> Builder<'a> {
         let node = &self.graph.nodes[id];
         let bytes = std::fs::read(&file.path).map_err(|e| BuildError::Stage {
             node: node.name.clone(),
-            message: format!("cannot read `{}`: {e}", file.path.display()),
+            error: StageError::Unreadable {
+                path: file.path.clone(),
+                source: e,
+            },
         })?;
         let hash = ContentHash::of(&bytes);
         let (key, desc) = node.stage.key(&[hash]).map_err(|e| BuildError::Stage {
             node: node.name.clone(),
-            message: format!("cannot form its cache key: {e}"),
+            error: StageError::Key(e),
         })?;
         let unchanged = self
             .cache
@@ -409,35 +474,37 @@ impl<'a> Builder<'a> {
         Ok(())
     }
 
-    /// A cache hit as `Ok((hash, value if already loaded))`, or why the node must run.
-    #[allow(clippy::type_complexity)]
-    fn lookup(
-        &self,
-        id: NodeId,
-        key: &Key,
-    ) -> Result<Result<(ContentHash, Option<Value>), Option<String>>, BuildError> {
+    /// Whether node `id`'s entry under `key` is up to date, and if not, why.
+    fn lookup(&self, id: NodeId, key: &Key) -> Result<CacheStatus, BuildError> {
         let node = &self.graph.nodes[id];
         let Some(hash) = self.cache.peek_hash(key) else {
-            return Ok(Err(None));
+            return Ok(CacheStatus::Missing);
         };
         if !matches!(node.stage, Stage::Write(_)) {
-            return Ok(Ok((hash, None)));
+            return Ok(CacheStatus::Fresh { hash, value: None });
         }
         // A write is only up to date if its files are still there, unchanged.
         match self.cache.get(key)? {
             Lookup::Hit { payload, hash } => {
                 match serde_json::from_slice::<WrittenOutput>(&payload) {
                     Ok(written) => match written.files.iter().find(|f| !self.sink.holds(f)) {
-                        None => Ok(Ok((hash, Some(Value::Written(Arc::new(written)))))),
-                        Some(f) => Ok(Err(Some(format!("`{}` is missing or was changed", f.path)))),
+                        None => Ok(CacheStatus::Fresh {
+                            hash,
+                            value: Some(Value::Written(Arc::new(written))),
+                        }),
+                        Some(f) => Ok(CacheStatus::Stale {
+                            why: format!("`{}` is missing or was changed", f.path),
+                        }),
                     },
-                    Err(e) => Ok(Err(Some(format!("its cache entry is unreadable: {e}")))),
+                    Err(e) => Ok(CacheStatus::Stale {
+                        why: format!("its cache entry is unreadable: {e}"),
+                    }),
                 }
             }
-            Lookup::Corrupt { reason } => {
-                Ok(Err(Some(format!("its cache entry was corrupt ({reason})"))))
-            }
-            Lookup::Miss => Ok(Err(None)),
+            Lookup::Corrupt { reason } => Ok(CacheStatus::Stale {
+                why: format!("its cache entry was corrupt ({reason})"),
+            }),
+            Lookup::Miss => Ok(CacheStatus::Missing),
         }
     }
 
@@ -452,7 +519,7 @@ impl<'a> Builder<'a> {
             return Ok(());
         }
         if let Lookup::Hit { payload, .. } = self.cache.get(&key)?
-            && let Ok(value) = decode(&self.graph.nodes[id].stage, payload)
+            && let Some(value) = decode(&self.graph.nodes[id].stage, payload)
         {
             self.resolved.get_mut(&id).expect("resolved").value = Some(value);
             return Ok(());
@@ -500,11 +567,9 @@ impl<'a> Builder<'a> {
         let node = &self.graph.nodes[id];
         result.map_err(|failure| BuildError::Stage {
             node: node.name.clone(),
-            message: match failure {
-                Failure::Message(message) => message,
-                Failure::CorruptInput { reason, .. } => {
-                    format!("its input was corrupt again after a rebuild: {reason}")
-                }
+            error: match failure {
+                Failure::Failed(error) => error,
+                Failure::CorruptInput { reason, .. } => StageError::InputCorruptAgain(reason),
             },
         })
     }
@@ -525,9 +590,7 @@ impl<'a> Builder<'a> {
         if self.rerun(id, why, store_mesh)? != self.resolved[&id].hash {
             return Err(BuildError::Stage {
                 node: self.graph.nodes[id].name.clone(),
-                message: "rebuilt after its cache entry was corrupt, it made different bytes \
-                          (the stage is not deterministic)"
-                    .into(),
+                error: StageError::NotDeterministic,
             });
         }
         Ok(())
@@ -535,7 +598,7 @@ impl<'a> Builder<'a> {
 
     /// `key`'s entry as a chunked mesh, if it is a good one. A chunked entry that fails
     /// verification is removed (so the node reruns); any other entry is left to `get`.
-    fn open_chunked(&self, key: &Key) -> Result<Option<Value>, BuildError> {
+    fn open_chunked(&self, key: &Key) -> Result<Option<Value>, CacheError> {
         let Opened::Entry(reader) = self.cache.open_entry(key)? else {
             return Ok(None);
         };
@@ -566,7 +629,7 @@ impl<'a> Builder<'a> {
         std::thread::scope(|scope| {
             let prewriters = self.begin_prewrites(id, scope);
             let (send, receive) = mpsc::sync_channel::<Arc<MeshChunk>>(CHUNKS_IN_FLIGHT);
-            let writer = scope.spawn(move || -> Result<_, String> {
+            let writer = scope.spawn(move || -> Result<_, StageError> {
                 // Begun on the first chunk, so a 2D tiling makes no temporary file.
                 let mut writer = None;
                 for chunk in receive {
@@ -574,12 +637,11 @@ impl<'a> Builder<'a> {
                         // Self-verifying: the payload's trailer holds every section's hash, so
                         // hashing the whole again as it is written (5% of a cold tiling's CPU)
                         // would only repeat them.
-                        let pending = cache.begin_self_verified(key).map_err(|e| e.to_string())?;
-                        writer = Some(ChunkedWriter::new(pending).map_err(|e| e.to_string())?);
+                        let pending = cache.begin_self_verified(key)?;
+                        writer = Some(ChunkedWriter::new(pending).map_err(StageError::CacheBegin)?);
                     }
                     if let Some(w) = writer.as_mut() {
-                        w.push(&chunk)
-                            .map_err(|e| format!("cannot write the cache entry: {e}"))?;
+                        w.push(&chunk).map_err(StageError::CacheWrite)?;
                     }
                 }
                 Ok(writer)
@@ -589,43 +651,44 @@ impl<'a> Builder<'a> {
                     // A stopped prewriter only means its file is written again later.
                     let _ = prewriter.send.send(Arc::clone(&chunk));
                 }
-                send.send(chunk)
-                    .map_err(|_| "the cache writer stopped".to_string())
+                send.send(chunk).map_err(|_| StageError::CacheWriterStopped)
             });
             drop(send);
             let prewritten = self.finish_prewrites(prewriters);
             let written = writer
                 .join()
-                .map_err(|_| "the cache writer panicked".to_string())?;
+                .map_err(|_| StageError::Panicked("the cache writer"))?;
             // A writer error explains a stage's "writer stopped", so it comes first.
             let writer = written?;
             match (output?, writer) {
                 (TileOutput::Whole(mesh), None) => Ok(Value::Mesh(Arc::new(mesh))),
                 (TileOutput::Chunked(head), Some(writer)) => {
-                    let (pending, _, check) = writer
-                        .finish(head)
-                        .map_err(|e| format!("cannot write the cache entry: {e}"))?;
-                    pending.commit_declared(check).map_err(|e| e.to_string())?;
-                    match self.open_chunked(key).map_err(|e| e.to_string())? {
+                    let (pending, _, check) =
+                        writer.finish(head).map_err(StageError::CacheWrite)?;
+                    pending.commit_declared(check)?;
+                    match self.open_chunked(key)? {
                         Some(value) => {
                             if let Value::Chunked(mesh) = &value {
                                 let hash = mesh.source().hash();
                                 let mut ready = self.prewritten.lock().map_err(|_| {
-                                    "a thread writing files early panicked".to_string()
+                                    StageError::Panicked("a thread writing files early")
                                 })?;
                                 for (node, file) in prewritten {
-                                    ready.insert(node, (hash, file));
+                                    ready.insert(node, WrittenEarly { mesh: hash, file });
                                 }
                             }
                             Ok(value)
                         }
-                        None => Err("the cache entry just written cannot be read back".into()),
+                        None => Err(StageError::EntryUnreadable.into()),
                     }
                 }
-                (TileOutput::Chunked(_), None) => Err("the tiling produced no chunks".into()),
-                (TileOutput::Whole(_), Some(_)) => {
-                    Err("the tiling produced chunks and a whole mesh".into())
+                (TileOutput::Chunked(_), None) => {
+                    Err(StageError::Internal("the tiling produced no chunks".into()).into())
                 }
+                (TileOutput::Whole(_), Some(_)) => Err(StageError::Internal(
+                    "the tiling produced chunks and a whole mesh".into(),
+                )
+                .into()),
             }
         })
     }
@@ -633,7 +696,7 @@ impl<'a> Builder<'a> {
     /// The failure of an `islands` node reading node `input`.
     fn islands_failure(&self, input: NodeId, failure: IslandsFailure) -> Failure {
         match failure {
-            IslandsFailure::Failed(message) => Failure::Message(message),
+            IslandsFailure::Failed(error) => Failure::Failed(error),
             IslandsFailure::CorruptInput(reason) => Failure::CorruptInput { input, reason },
         }
     }
@@ -651,34 +714,29 @@ impl<'a> Builder<'a> {
         let cache = self.cache;
         std::thread::scope(|scope| {
             let (send, receive) = mpsc::sync_channel::<Arc<MeshChunk>>(CHUNKS_IN_FLIGHT);
-            let writer = scope.spawn(move || -> Result<_, String> {
-                let pending = cache.begin_self_verified(key).map_err(|e| e.to_string())?;
-                let mut writer = ChunkedWriter::new(pending).map_err(|e| e.to_string())?;
+            let writer = scope.spawn(move || -> Result<_, StageError> {
+                let pending = cache.begin_self_verified(key)?;
+                let mut writer = ChunkedWriter::new(pending).map_err(StageError::CacheBegin)?;
                 for chunk in receive {
-                    writer
-                        .push(&chunk)
-                        .map_err(|e| format!("cannot write the cache entry: {e}"))?;
+                    writer.push(&chunk).map_err(StageError::CacheWrite)?;
                 }
                 Ok(writer)
             });
             let head = stage.run_chunked(mesh, &mut |chunk| {
-                send.send(chunk)
-                    .map_err(|_| "the cache writer stopped".to_string())
+                send.send(chunk).map_err(|_| StageError::CacheWriterStopped)
             });
             drop(send);
             let writer = writer
                 .join()
-                .map_err(|_| "the cache writer panicked".to_string())?;
+                .map_err(|_| StageError::Panicked("the cache writer"))?;
             // A writer error explains a stage's "writer stopped", so it comes first.
             let writer = writer?;
             let head = head.map_err(|failure| self.islands_failure(input, failure))?;
-            let (pending, _, check) = writer
-                .finish(head)
-                .map_err(|e| format!("cannot write the cache entry: {e}"))?;
-            pending.commit_declared(check).map_err(|e| e.to_string())?;
-            match self.open_chunked(key).map_err(|e| e.to_string())? {
+            let (pending, _, check) = writer.finish(head).map_err(StageError::CacheWrite)?;
+            pending.commit_declared(check)?;
+            match self.open_chunked(key)? {
                 Some(value) => Ok(value),
-                None => Err("the cache entry just written cannot be read back".into()),
+                None => Err(StageError::EntryUnreadable.into()),
             }
         })
     }
@@ -745,7 +803,7 @@ impl<'a> Builder<'a> {
             return Vec::new();
         };
         match ready.remove(&id) {
-            Some((hash, file)) if hash == input => vec![file],
+            Some(early) if early.mesh == input => vec![early.file],
             _ => Vec::new(),
         }
     }
@@ -761,13 +819,15 @@ impl<'a> Builder<'a> {
         };
         let bytes = |k: usize| match input(k) {
             Value::Bytes(b) => Ok(b),
-            _ => Err(format!(
+            _ => Err(StageError::Internal(format!(
                 "input {k} of `{}` is not a byte payload",
                 node.name
-            )),
+            ))),
         };
         match &node.stage {
-            Stage::File(file) => Err(format!("`{}` is read, not run", file.given).into()),
+            Stage::File(file) => {
+                Err(StageError::Internal(format!("`{}` is read, not run", file.given)).into())
+            }
             Stage::Cell(stage) => Ok(Value::Bytes(Arc::new(stage.run()?))),
             Stage::MeshCell(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
             Stage::Crystal(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
@@ -784,7 +844,7 @@ impl<'a> Builder<'a> {
             }
             Stage::Contour(stage) => {
                 let Value::Bytes(cell) = input(0) else {
-                    return Err(Failure::Message("input is not a cell".into()));
+                    return Err(StageError::Internal("input is not a cell".into()).into());
                 };
                 // Inputs: the cell, the part (with `within`), the density table (when solved).
                 let part = match stage.within {
@@ -829,7 +889,7 @@ impl<'a> Builder<'a> {
                     Err(failure) => Err(self.islands_failure(node.inputs[0], failure)),
                 },
                 Value::Chunked(mesh) => self.run_islands_chunked(node.inputs[0], stage, key, &mesh),
-                _ => Err(Failure::Message("input is not a mesh".into())),
+                _ => Err(StageError::Internal("input is not a mesh".into()).into()),
             },
             Stage::Write(stage) => {
                 let prewritten = self.take_prewritten(id, self.resolved[&node.inputs[0]].hash);
@@ -843,11 +903,11 @@ impl<'a> Builder<'a> {
                         self.sink,
                         prewritten,
                     ),
-                    _ => return Err(Failure::Message("input is not a mesh".into())),
+                    _ => return Err(StageError::Internal("input is not a mesh".into()).into()),
                 };
                 match input {
                     Ok(written) => Ok(Value::Written(Arc::new(written))),
-                    Err(WriteError::Failed(message)) => Err(Failure::Message(message)),
+                    Err(WriteError::Failed(error)) => Err(Failure::Failed(error)),
                     Err(WriteError::CorruptInput(reason)) => Err(Failure::CorruptInput {
                         input: node.inputs[0],
                         reason,
@@ -897,7 +957,8 @@ impl<'a> Builder<'a> {
     }
 }
 
-fn decode(stage: &Stage, payload: Vec<u8>) -> Result<Value, String> {
+/// The value of node payload `payload`, if it decodes.
+fn decode(stage: &Stage, payload: Vec<u8>) -> Option<Value> {
     match stage {
         Stage::File(_)
         | Stage::Cell(_)
@@ -907,12 +968,12 @@ fn decode(stage: &Stage, payload: Vec<u8>) -> Result<Value, String> {
         | Stage::Fit(_)
         | Stage::Combine(_)
         | Stage::Constrain(_)
-        | Stage::Density(_) => Ok(Value::Bytes(Arc::new(payload))),
+        | Stage::Density(_) => Some(Value::Bytes(Arc::new(payload))),
         Stage::Contour(_) | Stage::Sdf(_) | Stage::Tile(_) | Stage::Islands(_) => {
-            Ok(Value::Mesh(Arc::new(MeshArtifact::decode(&payload)?)))
+            Some(Value::Mesh(Arc::new(MeshArtifact::decode(&payload).ok()?)))
         }
         Stage::Write(_) => serde_json::from_slice(&payload)
-            .map(|w| Value::Written(Arc::new(w)))
-            .map_err(|e| e.to_string()),
+            .ok()
+            .map(|w| Value::Written(Arc::new(w))),
     }
 }

@@ -56,9 +56,6 @@ enum Command {
     Sdf(SdfArgs),
     /// Reconstruct the periodic surface through a crystal's atoms (CIF or extended XYZ)
     Crystal(CrystalArgs),
-    /// Internal: frees files a build renamed away (temporary names only), after it returned
-    #[command(hide = true)]
-    FreeFiles { paths: Vec<std::path::PathBuf> },
 }
 
 pub fn main() -> ExitCode {
@@ -88,10 +85,6 @@ pub fn main() -> ExitCode {
         }
         Command::Sdf(args) => commands::sdf::run(&args),
         Command::Crystal(args) => commands::crystal::run(&args),
-        Command::FreeFiles { paths } => {
-            crate::deferred_free::free_files(&paths);
-            ExitCode::SUCCESS
-        }
     }
 }
 

@@ -23,10 +23,13 @@
 //!   after a block failed to go out, every later call fails (the file would have a gap).
 //!   Where the file system refuses `O_DIRECT` (at open or at the first write), the blocks are
 //!   written through the ordinary descriptor instead, still off the producing thread.
+//!   [`DirectFile::blocks`] counts which way each block went.
 
 use std::fs::File;
 use std::io::{self, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, SyncSender, TryRecvError, sync_channel};
 use std::thread::JoinHandle;
 
@@ -37,6 +40,34 @@ pub const BLOCK: usize = 4 << 20;
 pub const ALIGN: usize = 4096;
 /// Blocks queued for the writer thread besides the one it writes and the one being filled.
 const BLOCKS_QUEUED: usize = 1;
+
+/// How the whole blocks of a [`DirectFile`] went to disk so far.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BlockStats {
+    /// Written through the `O_DIRECT` descriptor.
+    pub direct: u64,
+    /// Written through the ordinary descriptor: `O_DIRECT` refused (or not on this system).
+    pub plain: u64,
+}
+
+/// The writer thread's counts behind [`BlockStats`].
+#[derive(Debug, Default)]
+struct BlockCounts {
+    direct: AtomicU64,
+    plain: AtomicU64,
+}
+
+/// How the writer thread gets its direct descriptor: as the system allows, or (in tests)
+/// refused at open or at the first write, to run the fallback on a file system that would
+/// take `O_DIRECT`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Direct {
+    Try,
+    #[cfg(test)]
+    RefusedAtOpen,
+    #[cfg(test)]
+    RefusedAtWrite,
+}
 
 /// A file being written front to back (see the module doc).
 pub struct DirectFile {
@@ -52,6 +83,9 @@ pub struct DirectFile {
     path: PathBuf,
     /// Set when a block could not be handed off: the file has a gap, so every later call fails.
     broken: bool,
+    /// Which way the blocks went, counted by the writer thread.
+    counts: Arc<BlockCounts>,
+    direct: Direct,
 }
 
 impl DirectFile {
@@ -65,6 +99,17 @@ impl DirectFile {
             handed: 0,
             path: path.to_path_buf(),
             broken: false,
+            counts: Arc::default(),
+            direct: Direct::Try,
+        }
+    }
+
+    /// How the whole blocks handed to the writer thread went to disk: all of them once
+    /// streaming has ended (after `flush` or a seek elsewhere), those written so far before.
+    pub fn blocks(&self) -> BlockStats {
+        BlockStats {
+            direct: self.counts.direct.load(Ordering::Relaxed),
+            plain: self.counts.plain.load(Ordering::Relaxed),
         }
     }
 
@@ -99,7 +144,13 @@ impl DirectFile {
 
     fn try_hand_off(&mut self) -> io::Result<()> {
         if self.writer.is_none() {
-            self.writer = Some(BlockWriter::start(&self.file, &self.path)?);
+            let counts = Arc::clone(&self.counts);
+            self.writer = Some(BlockWriter::start(
+                &self.file,
+                &self.path,
+                self.direct,
+                counts,
+            )?);
         }
         let (Some(writer), Some(full)) = (self.writer.as_mut(), self.block.take()) else {
             return Ok(());
@@ -227,14 +278,26 @@ struct BlockWriter {
 }
 
 impl BlockWriter {
-    fn start(file: &File, path: &Path) -> io::Result<BlockWriter> {
+    fn start(
+        file: &File,
+        path: &Path,
+        mode: Direct,
+        counts: Arc<BlockCounts>,
+    ) -> io::Result<BlockWriter> {
         let plain = file.try_clone()?;
-        let direct = open_direct(path);
+        let direct = match mode {
+            Direct::Try => open_direct(path),
+            #[cfg(test)]
+            Direct::RefusedAtOpen => None,
+            // A descriptor that refuses every write, as a file system can after the open.
+            #[cfg(test)]
+            Direct::RefusedAtWrite => File::open(path).ok(),
+        };
         let (full, blocks) = sync_channel::<(u64, AlignedBlock)>(BLOCKS_QUEUED);
         let (done, emptied) = sync_channel(BLOCKS_QUEUED + 2);
         let thread = std::thread::Builder::new()
             .name("direct-file".into())
-            .spawn(move || write_blocks(direct, plain, blocks, done))?;
+            .spawn(move || write_blocks(direct, plain, blocks, done, &counts))?;
         Ok(BlockWriter {
             full,
             emptied,
@@ -306,11 +369,16 @@ fn write_blocks(
     plain: File,
     blocks: Receiver<(u64, AlignedBlock)>,
     done: SyncSender<io::Result<AlignedBlock>>,
+    counts: &BlockCounts,
 ) {
     for (at, block) in blocks {
         let mut written = match &direct {
             Some(d) => write_all_at(d, block.bytes(), at),
             None => write_all_at(&plain, block.bytes(), at),
+        };
+        let mut way = match direct {
+            Some(_) => &counts.direct,
+            None => &counts.plain,
         };
         if written.is_err() && direct.is_some() {
             // Refused (a file system that takes the flag but not the write): write this and
@@ -318,8 +386,12 @@ fn write_blocks(
             // already put there is harmless.
             direct = None;
             written = write_all_at(&plain, block.bytes(), at);
+            way = &counts.plain;
         }
         let failed = written.is_err();
+        if !failed {
+            way.fetch_add(1, Ordering::Relaxed);
+        }
         if done.send(written.map(|()| block)).is_err() || failed {
             return;
         }
@@ -428,6 +500,118 @@ mod tests {
         data[80..85].copy_from_slice(b"PATCH");
         data.extend_from_slice(b"tail");
         assert!(std::fs::read(&path).expect("read") == data);
+    }
+
+    /// Whether the file system holding `dir` takes an `O_DIRECT` write of one aligned block,
+    /// tried here with the system calls themselves, not through `DirectFile`.
+    #[cfg(target_os = "linux")]
+    fn takes_o_direct(dir: &Path) -> bool {
+        let path = dir.join("probe");
+        File::create(&path).expect("create the probe");
+        let Some(file) = open_direct(&path) else {
+            return false;
+        };
+        let block = {
+            let mut block = AlignedBlock::new();
+            block.fill(&[7u8; ALIGN]);
+            block
+        };
+        let taken = write_all_at(&file, block.bytes(), 0).is_ok();
+        let _ = std::fs::remove_file(&path);
+        taken
+    }
+
+    #[cfg(not(target_os = "linux"))]
+    fn takes_o_direct(_dir: &Path) -> bool {
+        false
+    }
+
+    /// Writes five blocks and a tail to `name` in `dir` (with `direct` as the descriptor's
+    /// way), checks the bytes read back, and returns how the blocks went.
+    fn write_blocks_in(dir: &Path, name: &str, direct: Direct) -> BlockStats {
+        let data = pattern(5 * BLOCK + 4321);
+        let path = dir.join(name);
+        let mut out = DirectFile::new(File::create(&path).expect("create"), &path);
+        out.direct = direct;
+        for part in data.chunks(1 << 20) {
+            out.write_all(part).expect("write");
+        }
+        out.flush().expect("flush");
+        let blocks = out.blocks();
+        drop(out);
+        assert!(
+            std::fs::read(&path).expect("read") == data,
+            "`{name}` in {}: the bytes read back differ from those written",
+            dir.display()
+        );
+        blocks
+    }
+
+    #[test]
+    fn whole_blocks_go_through_o_direct_where_the_file_system_takes_it() {
+        // The system's temporary directory (tmpfs on many machines: it refused `O_DIRECT`
+        // before Linux 6.6), the test binary's directory (the target directory) and the
+        // crate's: a checkout on an ordinary disk takes `O_DIRECT` in the last two.
+        let mut candidates = vec![std::env::temp_dir()];
+        if let Some(dir) = std::env::current_exe()
+            .ok()
+            .and_then(|e| e.parent().map(Into::into))
+        {
+            candidates.push(dir);
+        }
+        candidates.push(PathBuf::from(env!("CARGO_MANIFEST_DIR")));
+        let mut seen = Vec::new();
+        for candidate in candidates {
+            let dir = tempfile::Builder::new()
+                .prefix(".direct-file-test")
+                .tempdir_in(&candidate)
+                .expect("temp dir");
+            let takes = takes_o_direct(dir.path());
+            let blocks = write_blocks_in(dir.path(), "five-blocks", Direct::Try);
+            let expected = match takes {
+                true => BlockStats {
+                    direct: 5,
+                    plain: 0,
+                },
+                false => BlockStats {
+                    direct: 0,
+                    plain: 5,
+                },
+            };
+            assert_eq!(
+                blocks,
+                expected,
+                "in {} (O_DIRECT {})",
+                candidate.display(),
+                if takes { "taken" } else { "refused" }
+            );
+            seen.push((candidate, takes));
+        }
+        eprintln!("O_DIRECT taken (true) or refused (false) by the file system of: {seen:?}");
+        let direct: Vec<_> = seen.iter().filter(|(_, takes)| *takes).collect();
+        assert!(
+            cfg!(not(target_os = "linux")) || !direct.is_empty(),
+            "no directory tried here takes O_DIRECT, so the direct path was not tested: {seen:?}"
+        );
+    }
+
+    #[test]
+    fn blocks_refused_at_open_or_at_the_first_write_go_the_ordinary_way() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        for (name, direct) in [
+            ("refused-at-open", Direct::RefusedAtOpen),
+            ("refused-at-write", Direct::RefusedAtWrite),
+        ] {
+            let blocks = write_blocks_in(dir.path(), name, direct);
+            assert_eq!(
+                blocks,
+                BlockStats {
+                    direct: 0,
+                    plain: 5
+                },
+                "{name}"
+            );
+        }
     }
 
     #[test]

@@ -6,7 +6,6 @@ pub mod build;
 pub mod cache;
 pub mod cli;
 pub mod commands;
-pub mod deferred_free;
 pub mod diagnostics;
 pub mod direct_file;
 pub mod files;

@@ -219,19 +219,35 @@ fn concurrent_builds_on_one_cache_both_succeed_with_identical_files() {
     assert_eq!(outputs(&fresh), first);
 }
 
+#[cfg(unix)]
 #[test]
-fn the_hidden_free_files_helper_removes_only_temporary_names() {
-    // What a build hands to its detached helper: big files it renamed out of the way.
+fn a_build_removes_only_the_temporary_files_of_its_own_outputs() {
     let p = Project::new(MANIFEST);
-    let names = ["part.stl", ".part.stl.tmp-1-2", ".tmp-1-2-00ff"];
-    for name in names {
-        std::fs::write(p.path().join(name), b"old").expect("write");
+    std::fs::create_dir_all(p.out("")).expect("mkdir");
+    // A process that is gone, as a build killed with SIGKILL is.
+    let mut child = std::process::Command::new("true").spawn().expect("spawn");
+    child.wait().expect("wait");
+    let dead = child.id();
+    let ours = [
+        format!(".a.stl.tmp-{dead}-0"),
+        format!(".b.ply.tmp-{dead}-3"),
+        format!(".a.report.json.tmp-{dead}-1"),
+    ];
+    // Names like ours, of files no output of this manifest writes: not ours to remove.
+    let others = [
+        format!(".notes.txt.tmp-{dead}-0"),
+        format!(".a.ply.tmp-{dead}-0"),
+        format!(".tmp-{dead}-0-00ff"),
+        "part.stl".to_string(),
+    ];
+    for name in ours.iter().chain(&others) {
+        std::fs::write(p.out(name), b"old").expect("write");
     }
-    let out = p.run(&["free-files", "--", names[0], names[1], names[2]]);
-    assert!(out.status.success());
-    assert!(
-        p.path().join(names[0]).exists(),
-        "a user's name is never freed"
-    );
-    assert!(!p.path().join(names[1]).exists() && !p.path().join(names[2]).exists());
+    p.build(&[]);
+    for name in &ours {
+        assert!(!p.out(name).exists(), "`{name}` was left");
+    }
+    for name in &others {
+        assert!(p.out(name).exists(), "`{name}` was removed");
+    }
 }

@@ -164,9 +164,10 @@ fn a_build_killed_hard_leaves_temporaries_that_the_next_build_and_clean_remove()
 #[test]
 fn a_live_builds_temporaries_are_not_swept() {
     let p = Project::new(SLOW_WRITE);
-    // A name as another running process would have: this test's own pid.
+    // A temporary of one of the outputs, as another running build of it would have: this
+    // test's own pid. (A name of a file no output writes is never swept at all.)
     std::fs::create_dir_all(p.path().join("out")).expect("mkdir");
-    let busy = p.out(&format!(".other.stl.tmp-{}-0", std::process::id()));
+    let busy = p.out(&format!(".big.stl.tmp-{}-0", std::process::id()));
     std::fs::write(&busy, b"being written").expect("write");
     let out = p.run(&[
         "build",

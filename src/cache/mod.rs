@@ -64,7 +64,6 @@ pub use store::{
 };
 
 use crate::cache::atomic::write_atomically;
-use crate::deferred_free::Deferred;
 
 /// The cache of one manifest, locked for this build. `Send + Sync`: share it by reference
 /// between the threads executing the graph.
@@ -73,9 +72,6 @@ pub struct Cache {
     dir: PathBuf,
     store: LocalStore,
     records: PathBuf,
-    /// Big entries `gc` renamed away, to be freed (see [`crate::deferred_free`]). Declared
-    /// before the lock so that, dropped, they are freed while it is still held.
-    collected: Deferred,
     /// Held (exclusively locked) for the Cache's lifetime; the OS releases the lock when the file
     /// is closed on drop, including when the process dies.
     _lock: File,
@@ -133,7 +129,6 @@ impl Cache {
             store: LocalStore::new(&dir),
             records: dir.join("records"),
             dir,
-            collected: Deferred::default(),
             _lock: lock,
         })
     }
@@ -288,12 +283,6 @@ impl Cache {
         Ok(())
     }
 
-    /// The big entries the last `gc` renamed away (under temporary names), now the caller's
-    /// to free.
-    pub fn take_collected(&self) -> Vec<PathBuf> {
-        self.collected.take()
-    }
-
     /// Removes every entry whose key is not in `keep` (pass the keys of every node's latest
     /// record, e.g. from [`Cache::records`]), so that a long optimisation loop does not fill the
     /// disk; returns how many entries were removed. Temporary files left by crashed builds go too.
@@ -301,7 +290,7 @@ impl Cache {
     /// Records are kept even when their entry goes: a record only explains the next miss, and
     /// "parameter `offset` changed" is still true after the old mesh is gone.
     pub fn gc(&self, keep: &HashSet<Key>) -> Result<usize, CacheError> {
-        let removed = self.store.gc_deferring(keep, Some(&self.collected))?;
+        let removed = self.store.gc(keep)?;
         let my_pid = std::process::id();
         if let Ok(entries) = fs::read_dir(&self.records) {
             for entry in entries.filter_map(Result::ok) {

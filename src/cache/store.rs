@@ -37,11 +37,10 @@ use std::fs::{self, File};
 use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
-use crate::cache::atomic::{TempFile, temp_name, temp_owner_pid, write_atomically};
+use crate::cache::atomic::{TempFile, temp_owner_pid, write_atomically};
 use crate::cache::content_hash::ContentHash;
 use crate::cache::error::CacheError;
 use crate::cache::key::Key;
-use crate::deferred_free::{DEFER_BYTES, Deferred};
 use crate::direct_file::DirectFile;
 
 const MAGIC: [u8; 4] = *b"LBC1";
@@ -174,17 +173,6 @@ impl LocalStore {
     /// are left alone. Must only run while holding the cache lock (as [`super::Cache`] does), or
     /// another process's in-flight temporary files could be removed.
     pub fn gc(&self, keep: &HashSet<Key>) -> Result<usize, CacheError> {
-        self.gc_deferring(keep, None)
-    }
-
-    /// [`LocalStore::gc`], big entries renamed to temporary names and freed through
-    /// `deferred` (see [`crate::deferred_free`]) when it is given. Renamed, an entry is gone
-    /// for every reader at once; only its blocks wait.
-    pub fn gc_deferring(
-        &self,
-        keep: &HashSet<Key>,
-        deferred: Option<&Deferred>,
-    ) -> Result<usize, CacheError> {
         let my_pid = std::process::id();
         let mut removed = 0;
         for shard in read_dir_or_empty(&self.objects)? {
@@ -201,9 +189,7 @@ impl LocalStore {
                 let Some(name) = name.to_str() else { continue };
                 let path = entry.path();
                 if let Ok(key) = name.parse::<Key>() {
-                    if name.starts_with(&shard_name)
-                        && !keep.contains(&key)
-                        && remove_entry(&path, deferred)?
+                    if name.starts_with(&shard_name) && !keep.contains(&key) && remove_file(&path)?
                     {
                         removed += 1;
                     }
@@ -619,26 +605,6 @@ fn read_entry(file: &mut File, file_len: u64) -> Result<(Vec<u8>, ContentHash), 
         return Err(Corruption::HashMismatch.into());
     }
     Ok((payload, actual))
-}
-
-/// Removes the entry file at `path`, or renames it to a temporary name for `deferred` to
-/// free when it is big; `Ok(false)` if already gone.
-fn remove_entry(path: &Path, deferred: Option<&Deferred>) -> Result<bool, CacheError> {
-    let big = fs::metadata(path).is_ok_and(|m| m.len() >= DEFER_BYTES);
-    match deferred {
-        Some(deferred) if big => {
-            let temp = path.with_file_name(temp_name());
-            match fs::rename(path, &temp) {
-                Ok(()) => {
-                    deferred.free(temp);
-                    Ok(true)
-                }
-                Err(e) if e.kind() == io::ErrorKind::NotFound => Ok(false),
-                Err(e) => Err(CacheError::io("rename for removal", path, e)),
-            }
-        }
-        _ => remove_file(path),
-    }
 }
 
 /// `Ok(false)` if already gone: another thread or process removing the same file is fine.

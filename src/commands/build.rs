@@ -88,13 +88,6 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
     let results = Builder::new(&graph, &cache, &sink, progress)
         .build(&args.targets)
         .map_err(|e| Failure::Build(e.to_string()))?;
-    // The outputs are in place: what they replaced, and the cache entries gc collected, are
-    // freed by a detached helper, so the command need not wait for the disk. Handed over
-    // before anything is printed: a closed stdout or stderr ends the process at its next
-    // write (SIGPIPE, see main.rs), which would leave them under their temporary names.
-    let mut freed = sink.take_replaced();
-    freed.extend(cache.take_collected());
-    crate::deferred_free::free_detached(freed);
     let mut reports = Vec::new();
     for result in &results {
         if args.verbose > 0 {

@@ -53,7 +53,8 @@ pub fn run(args: &CellArgs) -> Result<(), Failure> {
             args.name, args.name
         )));
     };
-    let group = crate::stages::symmetric::group_of(&spec.group).map_err(Failure::Build)?;
+    let group = crate::stages::symmetric::group_of(&spec.group)
+        .map_err(|e| Failure::Build(e.to_string()))?;
     let points = match &args.points {
         None => Vec::new(),
         Some(path) => {
@@ -73,8 +74,8 @@ pub fn run(args: &CellArgs) -> Result<(), Failure> {
     let payload = Builder::new(&graph, &cache, &sink, &NoProgress)
         .build_node(node)
         .map_err(|e| Failure::Build(e.to_string()))?;
-    let fitted =
-        crate::stages::symmetric::FittedPayload::from_bytes(&payload).map_err(Failure::Build)?;
+    let fitted = crate::stages::symmetric::FittedPayload::from_bytes(&payload)
+        .map_err(|e| Failure::Build(e.to_string()))?;
     let report = report(&args.name, &fitted, &group, &points).map_err(Failure::Build)?;
     if args.json {
         println!(
@@ -152,7 +153,7 @@ pub fn report(
     group: &Group,
     points: &[[f64; 3]],
 ) -> Result<CellReport, String> {
-    let cell = payload.cell(group)?;
+    let cell = payload.cell(group).map_err(|e| e.to_string())?;
     let d = group.dimension();
     let coefficients = cell
         .coefficients()

@@ -79,7 +79,7 @@ pub fn run(args: &CrystalArgs) -> ExitCode {
         &options,
     ) {
         Ok(f) => f,
-        Err(e) => return usage(e),
+        Err(e) => return usage(e.to_string()),
     };
     if args.json {
         let text = serde_json::to_string_pretty(&to_json(&given, &found))

@@ -74,9 +74,9 @@ pub(crate) fn compile(manifest: &Manifest) -> Result<Graph, Failure> {
     Graph::compile(manifest).map_err(|cycle| Failure::Usage(format!("error: {cycle}\n")))
 }
 
-/// Removes the temporary files that killed builds left among the outputs.
+/// Removes the temporary files that killed builds left of the manifest's output files.
 pub(crate) fn sweep_outputs(manifest: &Manifest, verbose: bool) {
-    for path in crate::files::sweep_stale_temporaries(&manifest::output_dirs(manifest)) {
+    for path in crate::files::sweep_stale_temporaries(&manifest::output_paths(manifest)) {
         if verbose {
             eprintln!(
                 "  removed `{}`, left by an interrupted build",

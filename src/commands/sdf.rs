@@ -58,7 +58,7 @@ impl ExternalSolids for MeshFiles {
         let full = relative_to(path, from);
         let shown = full.display().to_string();
         let bytes = read_input(&full).map_err(|e| format!("cannot read `{shown}`: {e}"))?;
-        mesh_field(&shown, &bytes)
+        mesh_field(&shown, &bytes).map_err(|e| e.to_string())
     }
 }
 

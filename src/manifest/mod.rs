@@ -31,7 +31,7 @@ mod source;
 mod tests;
 
 pub use model::*;
-pub use schema::output_files::output_dirs;
+pub use schema::output_files::output_paths;
 
 use source::{Report, Sources};
 

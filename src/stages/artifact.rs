@@ -10,6 +10,8 @@ use serde::{Deserialize, Serialize};
 use latticebuild_geom::mesh::Mesh;
 use latticebuild_geom::validate::{self, MeshCheck, Pieces};
 
+use super::StageError;
+
 pub use super::sizing::SizingSummary;
 
 #[cfg(not(target_endian = "little"))]
@@ -281,9 +283,12 @@ impl MeshArtifact {
         ]
     }
 
-    pub fn decode(payload: &[u8]) -> Result<MeshArtifact, String> {
-        let bad = |what: &str| format!("malformed mesh payload: {what}");
-        let take = |at: usize| -> Result<u64, String> {
+    pub fn decode(payload: &[u8]) -> Result<MeshArtifact, StageError> {
+        let bad = |what: &str| StageError::Malformed {
+            payload: "mesh",
+            detail: Some(what.to_string()),
+        };
+        let take = |at: usize| -> Result<u64, StageError> {
             let bytes = payload
                 .get(at..at + 8)
                 .ok_or_else(|| bad("truncated header"))?;

@@ -6,6 +6,7 @@ use latticebuild_geom::field::ScalarField;
 use latticebuild_geom::periodic::{PsModel, PsTerm};
 use latticebuild_geom::{expr, tpms};
 
+use super::StageError;
 use crate::cache::KeyBuilder;
 use crate::manifest::{Cell, CellSource};
 
@@ -36,10 +37,14 @@ impl CellStage {
     }
 
     /// The payload: the formula's text, UTF-8. Validation guarantees library names exist.
-    pub fn run(&self) -> Result<Vec<u8>, String> {
+    pub fn run(&self) -> Result<Vec<u8>, StageError> {
         let formula = match &self.source {
             CellSource::Tpms(name) => tpms::lookup(name)
-                .ok_or_else(|| format!("unknown TPMS `{name}` (manifest validation missed it)"))?
+                .ok_or_else(|| {
+                    StageError::Internal(format!(
+                        "unknown TPMS `{name}` (manifest validation missed it)"
+                    ))
+                })?
                 .formula
                 .to_string(),
             CellSource::Expr(text) => text.clone(),
@@ -48,9 +53,9 @@ impl CellStage {
             | CellSource::Minkowski { .. }
             | CellSource::Mesh(_)
             | CellSource::Crystal(_) => {
-                return Err(
+                return Err(StageError::Internal(
                     "blends, Minkowski combinations, meshes and crystals have no formula".into(),
-                );
+                ));
             }
         };
         Ok(formula.into_bytes())
@@ -64,15 +69,16 @@ fn ps_payload(terms: &[PsTerm]) -> Vec<u8> {
 
 /// The field of a cell payload: a mesh cell's (see [`super::mesh`]), a PS model's (see
 /// [`super::crystal`]) or a formula's.
-pub fn cell_field(payload: &[u8]) -> Result<Box<dyn ScalarField>, String> {
+pub fn cell_field(payload: &[u8]) -> Result<Box<dyn ScalarField>, StageError> {
     if super::mesh::is_mesh_cell(payload) {
         return super::mesh::mesh_cell_field(payload);
     }
     if super::crystal::is_ps_cell(payload) {
         return super::crystal::ps_cell_field(payload);
     }
-    let text = std::str::from_utf8(payload).map_err(|_| "cell formula is not UTF-8".to_string())?;
-    let compiled =
-        expr::compile(text).map_err(|e| format!("cell formula does not compile: {}", e.message))?;
+    let text = std::str::from_utf8(payload)
+        .map_err(|_| StageError::Internal("cell formula is not UTF-8".into()))?;
+    let compiled = expr::compile(text)
+        .map_err(|e| StageError::geometry_of("cell formula does not compile", e))?;
     Ok(Box::new(compiled))
 }

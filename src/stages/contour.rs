@@ -22,6 +22,7 @@ use latticebuild_geom::mesh::Mesh;
 use latticebuild_geom::symmetric::{Group, ReferenceElement};
 use latticebuild_geom::within::WithinSampler;
 
+use super::StageError;
 use super::artifact::{MeshArtifact, MeshSummary, Planar, ShellSummary};
 use super::mesh::part_sdf;
 use super::sizing::{DensityStage, Over, cell_field, sized_field, table_of};
@@ -196,7 +197,7 @@ impl ContourStage {
         part: Option<&[u8]>,
         table: Option<&[u8]>,
         progress: &dyn StageProgress,
-    ) -> Result<MeshArtifact, String> {
+    ) -> Result<MeshArtifact, StageError> {
         let field = cell_field(cell_payload, self.fitted.as_ref())?;
         let table = table.map(table_of).transpose()?;
         let scale = if self.over_element {
@@ -235,13 +236,17 @@ impl ContourStage {
         field: &dyn ScalarField,
         part: Option<&[u8]>,
         progress: &dyn StageProgress,
-    ) -> Result<MeshArtifact, String> {
+    ) -> Result<MeshArtifact, StageError> {
         progress.phase("contouring");
         let mut shell = None;
         let (mesh, planar) = if self.over_element {
             let group = match &self.fitted {
                 Some(spec) => group_of(spec)?,
-                None => return Err("`over = \"element\"` needs a cell with a symmetry".into()),
+                None => {
+                    return Err(StageError::Internal(
+                        "`over = \"element\"` needs a cell with a symmetry".into(),
+                    ));
+                }
             };
             self.contour_element(field, &group, progress, &mut shell)?
         } else if self.planar_domain {
@@ -277,18 +282,18 @@ impl ContourStage {
                     contour(&sampler, &model, &advance)
                 }
                 (_, _, Some(band)) => {
-                    let contoured = contour_band(lattice.inner.as_ref(), band, &model, &advance)
-                        .map_err(|e| e.to_string())?;
+                    let contoured = contour_band(lattice.inner.as_ref(), band, &model, &advance)?;
                     shell = Some(self.shell_summary(band, contoured.steepest, self.samples, false));
                     Ok(contoured.mesh)
                 }
                 _ => contour(&lattice, &model, &advance),
-            }
-            .map_err(|e| e.to_string())?;
+            }?;
             (mesh, None)
         };
         if mesh.is_empty() {
-            return Err(self.why_empty(field, part.is_some()));
+            return Err(StageError::EmptySolid(
+                self.why_empty(field, part.is_some()),
+            ));
         }
         progress.phase("checking the mesh");
         let summary = MeshSummary::of_mesh(&mesh, planar.is_some());
@@ -398,7 +403,7 @@ impl ContourStage {
         &self,
         field: &dyn ScalarField,
         shell: &mut Option<ShellSummary>,
-    ) -> Result<(Mesh, Option<Planar>), String> {
+    ) -> Result<(Mesh, Option<Planar>), StageError> {
         let size = self.cell_size;
         // A shell is the band of the field itself; other solids their implicit function.
         let band = self.solid.band();
@@ -423,8 +428,7 @@ impl ContourStage {
         let region = match band {
             Some(band) => contour_planar_box_band(&value, band, min, max, counts),
             None => contour_planar_box(&value, min, max, counts),
-        }
-        .map_err(|e| e.to_string())?;
+        }?;
         let cell_min = [min[0] / size[0], min[1] / size[1]];
         let cell_max = [max[0] / size[0], max[1] / size[1]];
         *shell = self
@@ -446,13 +450,13 @@ impl ContourStage {
         group: &Group,
         progress: &dyn StageProgress,
         shell: &mut Option<ShellSummary>,
-    ) -> Result<(Mesh, Option<Planar>), String> {
+    ) -> Result<(Mesh, Option<Planar>), StageError> {
         let samples = self.samples[0].max(self.samples[1]);
         let solid = SolidField {
             inner: field,
             solid: self.solid,
         };
-        let mut planar = |element: Element2| -> Result<(Mesh, Option<Planar>), String> {
+        let mut planar = |element: Element2| -> Result<(Mesh, Option<Planar>), StageError> {
             let (lo, hi) = element.bbox();
             let measured = self.measured_shell(field, planar_grid(lo, hi, [samples; 2]), &|_| true);
             // The square's sides are the grid's: a shell is its band. The triangle's third
@@ -475,8 +479,7 @@ impl ContourStage {
             let region = match band {
                 Some(band) => contour_planar_band(&raw, band, samples),
                 None => contour_planar(&value, element, samples),
-            }
-            .map_err(|e| e.to_string())?;
+            }?;
             Ok(planar_output(region, element.outline(), element.area()))
         };
         let advance = |n: usize| progress.advance(n);
@@ -484,15 +487,13 @@ impl ContourStage {
             // A shell over the cube: the band of the field, clipped by the box alone.
             Some(ReferenceElement::Cube) => match self.solid.band() {
                 Some(band) => {
-                    let contoured = contour_cube_band(field, band, samples, &advance)
-                        .map_err(|e| e.to_string())?;
+                    let contoured = contour_cube_band(field, band, samples, &advance)?;
                     *shell =
                         Some(self.shell_summary(band, contoured.steepest, [samples; 3], false));
                     Ok((contoured.mesh, None))
                 }
                 None => Ok((
-                    contour_clipped(&solid, Element3::Cube, samples, &advance)
-                        .map_err(|e| e.to_string())?,
+                    contour_clipped(&solid, Element3::Cube, samples, &advance)?,
                     None,
                 )),
             },
@@ -501,17 +502,16 @@ impl ContourStage {
                 let tet = |p: [f64; 3]| Element3::Tetrahedron.signed_distance(p) < 0.0;
                 *shell = self.measured_shell(field, grid, &tet);
                 Ok((
-                    contour_clipped(&solid, Element3::Tetrahedron, samples, &advance)
-                        .map_err(|e| e.to_string())?,
+                    contour_clipped(&solid, Element3::Tetrahedron, samples, &advance)?,
                     None,
                 ))
             }
             Some(ReferenceElement::Square) => planar(Element2::Square),
             Some(ReferenceElement::Triangle) => planar(Element2::Triangle),
-            None => Err(format!(
+            None => Err(StageError::DoesNotFit(format!(
                 "group {} has no reference element to contour over",
                 group.name()
-            )),
+            ))),
         }
     }
 }

@@ -14,6 +14,7 @@ use latticebuild_geom::field::ScalarField;
 use latticebuild_geom::periodic::reconstruct::{ReconstructOptions, Reconstruction, reconstruct};
 use latticebuild_geom::periodic::{ExpandOptions, PsModel, PsTerm, positions_of, read_crystal};
 
+use super::StageError;
 use crate::cache::KeyBuilder;
 use crate::manifest::CrystalCell;
 
@@ -43,7 +44,7 @@ impl CrystalStage {
             .param("optimize", self.cell.optimize)
     }
 
-    pub fn run(&self, file: &[u8]) -> Result<Vec<u8>, String> {
+    pub fn run(&self, file: &[u8]) -> Result<Vec<u8>, StageError> {
         let options = ReconstructOptions {
             tolerance: self.cell.tolerance,
             max_scale: self.cell.max_scale,
@@ -59,11 +60,11 @@ impl CrystalStage {
         )?;
         let r = &found.reconstruction;
         if !r.converged {
-            return Err(format!(
+            return Err(StageError::NotConverged(format!(
                 "the surface through `{}` reaches a relative error of {:.3e} at scale {}, \
                  above the tolerance {:e}: raise `reconstruct.max_scale` or `tolerance`",
                 self.cell.file.given, r.metrics.max_error, self.cell.max_scale, options.tolerance
-            ));
+            )));
         }
         Ok(encode(&r.model))
     }
@@ -85,8 +86,8 @@ pub fn reconstruct_crystal(
     species: Option<&str>,
     include_images: bool,
     options: &ReconstructOptions,
-) -> Result<FoundSurface, String> {
-    let crystal = read_crystal(given, bytes).map_err(|e| e.to_string())?;
+) -> Result<FoundSurface, StageError> {
+    let crystal = read_crystal(given, bytes)?;
     let atoms = crystal.atoms(&ExpandOptions {
         include_images,
         ..ExpandOptions::default()
@@ -95,13 +96,13 @@ pub fn reconstruct_crystal(
     let present = crystal.species();
     if points.is_empty() {
         let what = species.map_or("atoms".to_string(), |s| format!("`{s}` atoms"));
-        return Err(format!(
+        return Err(StageError::DoesNotFit(format!(
             "`{given}` has no {what}; its species are {}",
             present.join(", ")
-        ));
+        )));
     }
-    let reconstruction =
-        reconstruct(&points, options).map_err(|e| format!("the surface through `{given}`: {e}"))?;
+    let reconstruction = reconstruct(&points, options)
+        .map_err(|e| StageError::geometry_of(format!("the surface through `{given}`"), e))?;
     Ok(FoundSurface {
         name: crystal.name,
         species: present,
@@ -130,8 +131,8 @@ pub fn is_ps_cell(payload: &[u8]) -> bool {
     payload.starts_with(PS_MAGIC)
 }
 
-pub fn decode(payload: &[u8]) -> Result<PsModel, String> {
-    let bad = || "malformed periodic-surface cell payload".to_string();
+pub fn decode(payload: &[u8]) -> Result<PsModel, StageError> {
+    let bad = || StageError::malformed("periodic-surface cell");
     let rest = payload.strip_prefix(PS_MAGIC).ok_or_else(bad)?;
     let count = rest
         .get(..8)
@@ -158,7 +159,7 @@ pub fn decode(payload: &[u8]) -> Result<PsModel, String> {
 }
 
 /// The field of a PS payload (cell coordinates, period 1 for integer basis vectors).
-pub fn ps_cell_field(payload: &[u8]) -> Result<Box<dyn ScalarField>, String> {
+pub fn ps_cell_field(payload: &[u8]) -> Result<Box<dyn ScalarField>, StageError> {
     Ok(Box::new(decode(payload)?))
 }
 

@@ -27,6 +27,7 @@ use latticebuild_geom::islands::{
 use latticebuild_geom::mesh::{Mesh, MeshChunk};
 use latticebuild_geom::validate::{PieceCounter, StreamCheck};
 
+use super::StageError;
 use super::artifact::{MeshArtifact, MeshSummary, Removed};
 use super::chunked::{ChunkedHead, ChunkedMesh, ReadAt, is_corrupt};
 use crate::cache::{KeyBuilder, Param};
@@ -46,7 +47,7 @@ pub struct IslandsStage {
 pub enum IslandsFailure {
     /// The chunked input's entry failed verification while being read.
     CorruptInput(String),
-    Failed(String),
+    Failed(StageError),
 }
 
 impl IslandsStage {
@@ -68,11 +69,11 @@ impl IslandsStage {
     /// Filters a whole mesh (a contour's or an SDF program's, or a 2D tiling's).
     pub fn run(&self, artifact: &MeshArtifact) -> Result<MeshArtifact, IslandsFailure> {
         if artifact.planar.is_some() {
-            return Err(IslandsFailure::Failed(format!(
+            return Err(IslandsFailure::Failed(StageError::DoesNotFit(format!(
                 "`outputs.{}` is a planar region: `keep` and `min_island_volume` apply only \
                  to solids (give the region a thickness, e.g. `extrude`, to make it one)",
                 self.output
-            )));
+            ))));
         }
         self.filter(&artifact.mesh, artifact)
     }
@@ -83,13 +84,13 @@ impl IslandsStage {
     pub fn run_chunked<R: ReadAt>(
         &self,
         input: &ChunkedMesh<R>,
-        chunks: &mut dyn FnMut(Arc<MeshChunk>) -> Result<(), String>,
+        chunks: &mut dyn FnMut(Arc<MeshChunk>) -> Result<(), StageError>,
     ) -> Result<ChunkedHead, IslandsFailure> {
         let read = |e: std::io::Error| {
             if is_corrupt(&e) {
                 IslandsFailure::CorruptInput(e.to_string())
             } else {
-                IslandsFailure::Failed(format!("cannot read the tiled mesh: {e}"))
+                IslandsFailure::Failed(StageError::ReadChunked(e))
             }
         };
         let mut labeller = IslandLabeller::new(false);
@@ -143,12 +144,15 @@ impl IslandsStage {
     /// The stage's failure for the filter's error, naming the keys.
     fn failure(&self, e: IslandError) -> IslandsFailure {
         IslandsFailure::Failed(match e {
-            IslandError::NothingKept { .. } => format!(
-                "{} of `outputs.{}` would remove every piece: {e}",
-                self.keys(),
-                self.output
+            IslandError::NothingKept { .. } => StageError::geometry_of(
+                format!(
+                    "{} of `outputs.{}` would remove every piece",
+                    self.keys(),
+                    self.output
+                ),
+                e,
             ),
-            _ => format!("`outputs.{}`: {e}", self.output),
+            _ => StageError::geometry_of(format!("`outputs.{}`", self.output), e),
         })
     }
 

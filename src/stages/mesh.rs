@@ -17,6 +17,7 @@ use latticebuild_geom::field::ScalarField;
 use latticebuild_geom::mesh_read::{self, Format, TriangleSoup};
 use latticebuild_geom::mesh_sdf::{MeshSdf, Mode, PeriodicMeshSdf, SdfOptions};
 
+use super::StageError;
 use crate::cache::KeyBuilder;
 use crate::manifest::{MeshCell, MeshSampling};
 
@@ -33,19 +34,22 @@ pub struct FileStage {
 }
 
 /// The reader format of a file name (validated by the manifest: one of the known extensions).
-fn format_of(given: &str) -> Result<Format, String> {
+fn format_of(given: &str) -> Result<Format, StageError> {
     std::path::Path::new(given)
         .extension()
         .and_then(|e| e.to_str())
         .and_then(Format::from_extension)
-        .ok_or_else(|| format!("`{given}` has no mesh file extension"))
+        .ok_or_else(|| StageError::NoMeshExtension {
+            given: given.to_string(),
+        })
 }
 
 /// Reads the soup of a mesh file's bytes, in the format its content shows (its extension
 /// when the content does not tell); errors name the file.
-pub fn read_soup(given: &str, bytes: &[u8]) -> Result<TriangleSoup, String> {
+pub fn read_soup(given: &str, bytes: &[u8]) -> Result<TriangleSoup, StageError> {
     let extension = format_of(given)?.extension();
-    mesh_read::read_auto(bytes, Some(extension)).map_err(|e| format!("cannot read `{given}`: {e}"))
+    mesh_read::read_auto(bytes, Some(extension))
+        .map_err(|e| StageError::geometry_of(format!("cannot read `{given}`"), e))
 }
 
 /// `cell` of a mesh cell: the soup in the cell's reference frame, with its sampling mode.
@@ -78,7 +82,7 @@ impl MeshCellStage {
             )
     }
 
-    pub fn run(&self, file: &[u8]) -> Result<Vec<u8>, String> {
+    pub fn run(&self, file: &[u8]) -> Result<Vec<u8>, StageError> {
         let mut soup = read_soup(&self.cell.file.given, file)?;
         if self.cell.fit_placement {
             place_in_unit_cell(&mut soup);
@@ -131,11 +135,11 @@ pub fn is_mesh_cell(payload: &[u8]) -> bool {
     payload.starts_with(MESH_CELL_MAGIC)
 }
 
-fn decode(payload: &[u8]) -> Result<(TriangleSoup, MeshSampling), String> {
-    let bad = || "malformed mesh cell payload".to_string();
+fn decode(payload: &[u8]) -> Result<(TriangleSoup, MeshSampling), StageError> {
+    let bad = || StageError::malformed("mesh cell");
     let rest = payload.strip_prefix(MESH_CELL_MAGIC).ok_or_else(bad)?;
     let (&mode, rest) = rest.split_first().ok_or_else(bad)?;
-    let count = |b: &[u8]| -> Result<usize, String> {
+    let count = |b: &[u8]| -> Result<usize, StageError> {
         Ok(u64::from_le_bytes(b.try_into().map_err(|_| bad())?) as usize)
     };
     let (np, nt) = (
@@ -173,7 +177,7 @@ fn decode(payload: &[u8]) -> Result<(TriangleSoup, MeshSampling), String> {
 /// The field of a mesh cell's payload, repeated with period 1 (the cell is the unit cube
 /// centred at the origin, like every cell): the signed distance to the union of the mesh's
 /// periodic copies (or its containment), continuous across the cell's faces.
-pub fn mesh_cell_field(payload: &[u8]) -> Result<Box<dyn ScalarField>, String> {
+pub fn mesh_cell_field(payload: &[u8]) -> Result<Box<dyn ScalarField>, StageError> {
     let (soup, sampling) = decode(payload)?;
     let options = SdfOptions {
         mode: match sampling {
@@ -182,19 +186,21 @@ pub fn mesh_cell_field(payload: &[u8]) -> Result<Box<dyn ScalarField>, String> {
         },
         ..SdfOptions::default()
     };
-    let sdf = PeriodicMeshSdf::new(&soup, options).map_err(|e| format!("the cell's mesh: {e}"))?;
+    let sdf = PeriodicMeshSdf::new(&soup, options)
+        .map_err(|e| StageError::geometry_of("the cell's mesh", e))?;
     Ok(Box::new(sdf))
 }
 
 /// The part of `within`: its signed distance in model units, exact within `band` of the
 /// surface and clamped beyond (the sign stays exact everywhere).
-pub fn part_sdf(given: &str, bytes: &[u8], band: f64) -> Result<MeshSdf, String> {
+pub fn part_sdf(given: &str, bytes: &[u8], band: f64) -> Result<MeshSdf, StageError> {
     let soup = read_soup(given, bytes)?;
     let options = SdfOptions {
         band: Some(band),
         ..SdfOptions::default()
     };
-    MeshSdf::new(&soup, options).map_err(|e| format!("the part `{given}`: {e}"))
+    MeshSdf::new(&soup, options)
+        .map_err(|e| StageError::geometry_of(format!("the part `{given}`"), e))
 }
 
 #[cfg(test)]

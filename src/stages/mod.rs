@@ -30,6 +30,7 @@ pub mod cell;
 pub mod chunked;
 pub mod contour;
 pub mod crystal;
+pub mod error;
 pub mod islands;
 pub mod measure;
 pub mod mesh;
@@ -45,6 +46,7 @@ use crate::manifest::{Cell, Output};
 pub use artifact::{
     MeshArtifact, MeshSummary, Removed, ShellSummary, TilingSummary, WrittenFile, WrittenOutput,
 };
+pub use error::{GeomError, StageError};
 pub use write::{OutputSink, PendingFile, Prewritten};
 
 /// One node's computation, with its parameters.

@@ -17,6 +17,7 @@ use latticebuild_geom::mesh_sdf::{MeshSdf, SdfOptions};
 use latticebuild_geom::sdf::{self, Aabb, ExternalField, ExternalSolids, Program, SdfField};
 use latticebuild_geom::validate::{self, MeshCheck};
 
+use super::StageError;
 use super::artifact::{MeshArtifact, MeshSummary};
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::{SdfOutput, SdfResolution, voxel_samples};
@@ -27,13 +28,14 @@ pub const VERSION: u32 = 2;
 
 /// The signed distance of the mesh in `bytes`, read in the format its content shows (the
 /// extension of `given` when the content does not tell); errors name `given`.
-pub fn mesh_field(given: &str, bytes: &[u8]) -> Result<Arc<dyn ExternalField>, String> {
+pub fn mesh_field(given: &str, bytes: &[u8]) -> Result<Arc<dyn ExternalField>, StageError> {
     let extension = std::path::Path::new(given)
         .extension()
         .and_then(|e| e.to_str());
     let soup = mesh_read::read_auto(bytes, extension)
-        .map_err(|e| format!("cannot read `{given}`: {e}"))?;
-    let sdf = MeshSdf::new(&soup, SdfOptions::default()).map_err(|e| format!("`{given}`: {e}"))?;
+        .map_err(|e| StageError::geometry_of(format!("cannot read `{given}`"), e))?;
+    let sdf = MeshSdf::new(&soup, SdfOptions::default())
+        .map_err(|e| StageError::geometry_of(format!("`{given}`"), e))?;
     Ok(Arc::new(sdf))
 }
 
@@ -50,19 +52,18 @@ pub struct Contoured {
 pub fn contour_field(
     field: &SdfField,
     bounds: Option<Aabb>,
-    samples: &dyn Fn(&Aabb) -> Result<[usize; 3], String>,
+    samples: &dyn Fn(&Aabb) -> Result<[usize; 3], StageError>,
     progress: &dyn StageProgress,
-) -> Result<Contoured, String> {
+) -> Result<Contoured, StageError> {
     let domain = bounds.unwrap_or_else(|| field.domain());
     let counts = samples(&domain)?;
     progress.phase("contouring");
-    let mesh = sdf::mesh_with_progress(field, &domain, counts, &|n| progress.advance(n))
-        .map_err(|e| e.to_string())?;
+    let mesh = sdf::mesh_with_progress(field, &domain, counts, &|n| progress.advance(n))?;
     if mesh.is_empty() {
-        return Err(format!(
+        return Err(StageError::EmptySolid(format!(
             "the solid has no surface in the box {}",
             box_text(&domain)
-        ));
+        )));
     }
     progress.phase("checking the mesh");
     let check = validate::check(&mesh);
@@ -107,7 +108,7 @@ impl ExternalSolids for InputMeshes<'_> {
             .position(|f| f == path)
             .ok_or_else(|| format!("`{path}` is not an input of the stage"))?;
         let bytes = self.bytes.get(i).ok_or("missing input")?;
-        mesh_field(path, bytes)
+        mesh_field(path, bytes).map_err(|e| e.to_string())
     }
 }
 
@@ -161,21 +162,21 @@ impl SdfStage {
         &self,
         files: &[&[u8]],
         progress: &dyn StageProgress,
-    ) -> Result<MeshArtifact, String> {
+    ) -> Result<MeshArtifact, StageError> {
         progress.phase("compiling the program");
         let meshes = InputMeshes {
             files: &self.files,
             bytes: files,
         };
-        let field = self.program.field(&meshes).map_err(|e| e.to_string())?;
+        let field = self.program.field(&meshes)?;
         let bounds = self.bounds.map(|[min, max]| Aabb { min, max });
         let samples = |domain: &Aabb| match self.resolution {
             SdfResolution::Counts(c) => Ok(c),
             SdfResolution::Voxel(h) => voxel_samples(domain.min, domain.max, h).map_err(|_| {
-                format!(
+                StageError::ValueOutOfRange(format!(
                     "`voxel = {h}` gives too many samples for the box {}",
                     box_text(domain)
-                )
+                ))
             }),
         };
         let contoured = contour_field(&field, bounds, &samples, progress)?;

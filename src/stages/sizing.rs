@@ -28,6 +28,7 @@ use latticebuild_geom::graded::{GradedField, Spatial};
 use latticebuild_geom::symmetric::ReferenceElement;
 use serde::{Deserialize, Serialize};
 
+use super::StageError;
 use super::symmetric::{FittedPayload, group_of};
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::{GroupSpec, NodalValue, Sizing, Target};
@@ -102,20 +103,27 @@ impl DensityStage {
     }
 
     /// The table of the cell whose payload is `cell_payload`, as bytes.
-    pub fn run(&self, cell_payload: &[u8]) -> Result<Vec<u8>, String> {
+    pub fn run(&self, cell_payload: &[u8]) -> Result<Vec<u8>, StageError> {
         let field = cell_field(cell_payload, self.fitted.as_ref())?;
         let region = match (&self.fitted, self.over) {
             (None, Over::Period { dimension }) => Region::Period {
                 frame: latticebuild_geom::symmetric::Frame::Cartesian,
                 dimension,
             },
-            (None, Over::Element) => return Err("a reference element needs a fitted cell".into()),
+            (None, Over::Element) => {
+                return Err(StageError::Internal(
+                    "a reference element needs a fitted cell".into(),
+                ));
+            }
             (Some(spec), over) => {
                 let group = group_of(spec)?;
                 match (over, group.reference_element()) {
                     (Over::Element, Some(element)) => Region::Element(element),
                     (Over::Element, None) => {
-                        return Err(format!("group {} has no reference element", group.name()));
+                        return Err(StageError::DoesNotFit(format!(
+                            "group {} has no reference element",
+                            group.name()
+                        )));
                     }
                     (Over::Period { .. }, _) => Region::Period {
                         frame: group.domain().frame(),
@@ -152,7 +160,7 @@ impl DensityStage {
                 values
             }
         };
-        let table = LevelTable::from_samples(samples).map_err(|e| e.to_string())?;
+        let table = LevelTable::from_samples(samples)?;
         Ok(table.to_bytes())
     }
 }
@@ -161,7 +169,7 @@ impl DensityStage {
 pub fn cell_field(
     payload: &[u8],
     fitted: Option<&GroupSpec>,
-) -> Result<Box<dyn ScalarField>, String> {
+) -> Result<Box<dyn ScalarField>, StageError> {
     match fitted {
         None => super::cell::cell_field(payload),
         Some(spec) => {
@@ -206,7 +214,7 @@ pub fn sized_field(
     scale: [f64; 3],
     table: Option<&LevelTable>,
     probes: &[[f64; 3]],
-) -> Result<SizedField, String> {
+) -> Result<SizedField, StageError> {
     let shell = solid.band().is_some();
     let distance = |field: Box<dyn ScalarField>, level: f64| -> Box<dyn ScalarField> {
         Box::new(DistanceField {
@@ -274,7 +282,9 @@ pub fn sized_field(
         }
         Sizing::VolumeFraction { level, target } => {
             let table = table
-                .ok_or("a volume fraction needs the cell's table")?
+                .ok_or_else(|| {
+                    StageError::Internal("a volume fraction needs the cell's table".into())
+                })?
                 .clone();
             match target {
                 Target::Uniform(phi) => {
@@ -380,10 +390,8 @@ pub fn solve_uniform(
     table: &LevelTable,
     solid: Solid,
     phi: f64,
-) -> Result<(Solid, SizingSummary), String> {
-    let solved = table
-        .level_for(tabled_fraction(&solid, phi))
-        .map_err(|e| e.to_string())?;
+) -> Result<(Solid, SizingSummary), StageError> {
+    let solved = table.level_for(tabled_fraction(&solid, phi))?;
     let mut summary = SizingSummary {
         by: "volume_fraction".into(),
         target: Some(phi),
@@ -411,15 +419,15 @@ pub fn solve_uniform(
 
 /// A graded value's expression, compiled (node data only reaches tiled outputs, which
 /// evaluate it at their nodes).
-fn expression(value: &NodalValue) -> Result<Arc<dyn ScalarField>, String> {
+fn expression(value: &NodalValue) -> Result<Arc<dyn ScalarField>, StageError> {
     match value {
         NodalValue::Expr(text) => {
-            let compiled = expr::compile(text).map_err(|e| e.message.clone())?;
+            let compiled = expr::compile(text)?;
             Ok(Arc::new(compiled))
         }
-        NodalValue::NodeData(view) => Err(format!(
+        NodalValue::NodeData(view) => Err(StageError::DoesNotFit(format!(
             "node data `{view}` belongs to a scaffold's nodes, and this output has none"
-        )),
+        ))),
     }
 }
 
@@ -440,21 +448,21 @@ fn check_range(
     allowed: impl Fn(f64) -> bool,
     what: &str,
     range: &str,
-) -> Result<(), String> {
+) -> Result<(), StageError> {
     let [xs, ys, zs] = std::array::from_fn(|a| probes.iter().map(|p| p[a]).collect::<Vec<_>>());
     let mut out = vec![0.0; probes.len()];
     values.eval_points(&xs, &ys, &zs, &mut out);
     match out.iter().position(|&v| !allowed(v)) {
         None => Ok(()),
-        Some(i) => Err(format!(
+        Some(i) => Err(StageError::ValueOutOfRange(format!(
             "the graded {what} is {} at ({}, {}, {}), but it must be {range} everywhere in the \
              domain",
             out[i], probes[i][0], probes[i][1], probes[i][2]
-        )),
+        ))),
     }
 }
 
 /// The table in a payload.
-pub fn table_of(payload: &[u8]) -> Result<LevelTable, String> {
-    LevelTable::from_bytes(payload).ok_or_else(|| "malformed density table payload".to_string())
+pub fn table_of(payload: &[u8]) -> Result<LevelTable, StageError> {
+    LevelTable::from_bytes(payload).ok_or_else(|| StageError::malformed("density table"))
 }

@@ -17,6 +17,7 @@ use latticebuild_geom::symmetric::{
     fit_samples, minkowski_difference, minkowski_sum, weighted_average,
 };
 
+use super::StageError;
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::{FitResolution, GroupSpec, MinkowskiOp, Symmetric};
 
@@ -25,13 +26,13 @@ pub const VERSION: u32 = 2;
 const SAMPLES_MAGIC: &[u8; 8] = b"LBSAMP01";
 
 /// The group of a manifest's group spec.
-pub fn group_of(spec: &GroupSpec) -> Result<Group, String> {
+pub fn group_of(spec: &GroupSpec) -> Result<Group, StageError> {
     match spec {
-        GroupSpec::Named(name) => Group::by_name(name).map_err(|e| e.to_string()),
+        GroupSpec::Named(name) => Ok(Group::by_name(name)?),
         GroupSpec::Generators {
             dimension,
             generators,
-        } => Group::from_generators(*dimension, generators).map_err(|e| e.to_string()),
+        } => Ok(Group::from_generators(*dimension, generators)?),
     }
 }
 
@@ -106,12 +107,15 @@ impl FittedPayload {
         serde_json::to_vec(self).expect("fitted payload serializes")
     }
 
-    pub fn from_bytes(bytes: &[u8]) -> Result<FittedPayload, String> {
-        serde_json::from_slice(bytes).map_err(|e| format!("malformed fitted cell payload: {e}"))
+    pub fn from_bytes(bytes: &[u8]) -> Result<FittedPayload, StageError> {
+        serde_json::from_slice(bytes).map_err(|e| StageError::Malformed {
+            payload: "fitted cell",
+            detail: Some(e.to_string()),
+        })
     }
 
     /// The cell, rebuilt on `group` (which the payload's coefficients were fitted with).
-    pub fn cell(&self, group: &Group) -> Result<FittedCell, String> {
+    pub fn cell(&self, group: &Group) -> Result<FittedCell, StageError> {
         FittedCell::from_coefficients(
             group.clone(),
             self.n,
@@ -119,7 +123,7 @@ impl FittedPayload {
                 .iter()
                 .map(|&(a, b, c, re, im)| ([a, b, c], Complex64::new(re, im))),
         )
-        .map_err(|e| e.to_string())
+        .map_err(StageError::from)
     }
 }
 
@@ -138,11 +142,10 @@ impl SampleStage {
             .param("symmetrize", self.spec.symmetrize)
     }
 
-    pub fn run(&self, formula: &[u8]) -> Result<Vec<u8>, String> {
+    pub fn run(&self, formula: &[u8]) -> Result<Vec<u8>, StageError> {
         let group = group_of(&self.spec.group)?;
         let field = super::cell::cell_field(formula)?;
-        let samples = symmetric::sample(&group, self.n, &field, sample_options(&self.spec))
-            .map_err(|e| e.to_string())?;
+        let samples = symmetric::sample(&group, self.n, &field, sample_options(&self.spec))?;
         let (min, max) = samples
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
@@ -154,7 +157,7 @@ impl SampleStage {
             } else {
                 Side::Outside
             };
-            return Err(symmetric::FitError::EmptyInput { side }.to_string());
+            return Err(symmetric::FitError::EmptyInput { side }.into());
         }
         let mut out = Vec::with_capacity(24 + samples.len() * 8);
         out.extend_from_slice(SAMPLES_MAGIC);
@@ -165,8 +168,8 @@ impl SampleStage {
     }
 }
 
-fn decode_samples(payload: &[u8]) -> Result<(usize, Vec<f64>), String> {
-    let bad = || "malformed samples payload".to_string();
+fn decode_samples(payload: &[u8]) -> Result<(usize, Vec<f64>), StageError> {
+    let bad = || StageError::malformed("samples");
     if payload.get(..8) != Some(SAMPLES_MAGIC.as_slice())
         || payload.len() < 24
         || !(payload.len() - 24).is_multiple_of(8)
@@ -200,14 +203,14 @@ impl FitStage {
         matches!(self.spec.n, FitResolution::Fixed(_))
     }
 
-    pub fn run(&self, input: &[u8]) -> Result<Vec<u8>, String> {
+    pub fn run(&self, input: &[u8]) -> Result<Vec<u8>, StageError> {
         let group = group_of(&self.spec.group)?;
         let cell = match self.spec.n {
             FitResolution::Fixed(_) => {
                 let (n, samples) = decode_samples(input)?;
                 let scale = samples.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-                let cell = fit_samples(&group, n, &samples).map_err(|e| e.to_string())?;
-                check_surface(&cell, scale).map_err(|e| e.to_string())?;
+                let cell = fit_samples(&group, n, &samples)?;
+                check_surface(&cell, scale)?;
                 cell
             }
             FitResolution::Auto { tolerance } => {
@@ -216,9 +219,7 @@ impl FitStage {
                     sample: sample_options(&self.spec),
                     check_vanishing: true,
                 };
-                symmetric::fit_auto(&group, &field, &options, tolerance, max_n(&group))
-                    .map_err(|e| e.to_string())?
-                    .0
+                symmetric::fit_auto(&group, &field, &options, tolerance, max_n(&group))?.0
             }
         };
         Ok(FittedPayload::new(&cell, &self.spec, None).to_bytes())
@@ -270,7 +271,7 @@ impl CombineStage {
         }
     }
 
-    pub fn run(&self, inputs: &[&[u8]]) -> Result<Vec<u8>, String> {
+    pub fn run(&self, inputs: &[&[u8]]) -> Result<Vec<u8>, StageError> {
         let group = group_of(&self.spec.group)?;
         let cells: Vec<FittedCell> = inputs
             .iter()
@@ -290,8 +291,7 @@ impl CombineStage {
                 op: MinkowskiOp::Difference,
                 n,
             } => minkowski_difference(&cells[0], &cells[1], *n),
-        }
-        .map_err(|e| e.to_string())?;
+        }?;
         Ok(FittedPayload::new(&combined, &self.spec, None).to_bytes())
     }
 }
@@ -311,13 +311,11 @@ impl ConstrainStage {
             .param("invert", self.spec.invert)
     }
 
-    pub fn run(&self, input: &[u8]) -> Result<Vec<u8>, String> {
+    pub fn run(&self, input: &[u8]) -> Result<Vec<u8>, StageError> {
         let group = group_of(&self.spec.group)?;
         let mut cell = FittedPayload::from_bytes(input)?.cell(&group)?;
         let constraint = if self.spec.normal_to_faces {
-            let (constrained, report) = cell
-                .constrain_normal_to_faces()
-                .map_err(|e| e.to_string())?;
+            let (constrained, report) = cell.constrain_normal_to_faces()?;
             cell = constrained;
             Some(ConstraintSummary {
                 applied: report.applied,

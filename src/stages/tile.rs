@@ -43,6 +43,7 @@ use latticebuild_geom::tile::{
 use latticebuild_geom::validate::{PieceCounter, StreamCheck};
 use std::sync::Arc;
 
+use super::StageError;
 use super::artifact::{MeshArtifact, MeshSummary, Planar, ShellSummary, TilingSummary};
 use super::chunked::ChunkedHead;
 use super::contour::sizing_param;
@@ -225,19 +226,23 @@ impl TileStage {
     }
 
     /// The scaffold from the file's bytes (`None` for a grid), checked for bad elements.
-    fn scaffold(&self, file: Option<&[u8]>) -> Result<Scaffold, String> {
+    fn scaffold(&self, file: Option<&[u8]>) -> Result<Scaffold, StageError> {
         let scaffold = match (&self.scaffold, file) {
             (ScaffoldInput::File(given), Some(bytes)) => {
                 scaffold::read_scaffold(bytes, given, Some(&extension(given)))
-                    .map_err(|e| format!("cannot read the scaffold: {e}"))?
+                    .map_err(|e| StageError::geometry_of("cannot read the scaffold", e))?
             }
             (ScaffoldInput::Grid(g), _) => scaffold::grid(g.min, g.max, g.divisions, g.element)
-                .map_err(|e| format!("scaffold `{}`: {e}", self.scaffold_name))?,
+                .map_err(|e| {
+                    StageError::geometry_of(format!("scaffold `{}`", self.scaffold_name), e)
+                })?,
             (ScaffoldInput::File(given), None) => {
-                return Err(format!("the bytes of `{given}` are not an input"));
+                return Err(StageError::Internal(format!(
+                    "the bytes of `{given}` are not an input"
+                )));
             }
         };
-        scaffold::check(&scaffold).map_err(|e| format!("scaffold: {e}"))?;
+        scaffold::check(&scaffold).map_err(|e| StageError::geometry_of("scaffold", e))?;
         Ok(scaffold)
     }
 
@@ -249,10 +254,12 @@ impl TileStage {
     }
 
     /// The element kind against the cells' group, and the keys that need 2D (or 3D) elements.
-    fn check_kind(&self, kind: ElementKind) -> Result<(), String> {
+    fn check_kind(&self, kind: ElementKind) -> Result<(), StageError> {
         let needed = tiling_group(kind);
         let GroupSpec::Named(group) = &self.group else {
-            return Err("tiling needs a cell with a named group".into());
+            return Err(StageError::Internal(
+                "tiling needs a cell with a named group".into(),
+            ));
         };
         if group != needed {
             let cells = self
@@ -261,31 +268,31 @@ impl TileStage {
                 .map(|c| format!("`{c}`"))
                 .collect::<Vec<_>>()
                 .join(" and ");
-            return Err(format!(
+            return Err(StageError::DoesNotFit(format!(
                 "{} has {} elements, which need a cell of group `{needed}`, but {cells} of \
                  `outputs.{}` {} group `{group}`",
                 self.source(),
                 kind.name(),
                 self.output,
                 if self.cells.len() > 1 { "have" } else { "has" }
-            ));
+            )));
         }
         match (kind.dimension(), self.thicken, self.skin) {
-            (2, _, Some(_)) => Err(format!(
+            (2, _, Some(_)) => Err(StageError::DoesNotFit(format!(
                 "`outputs.{}.skin` does not apply to 2D scaffolds, but {} has {} elements: \
                  use `extrude = h` or `thickness_normal = h` to make the region a solid",
                 self.output,
                 self.source(),
                 kind.name()
-            )),
-            (3, Some(thicken), _) => Err(format!(
+            ))),
+            (3, Some(thicken), _) => Err(StageError::DoesNotFit(format!(
                 "`outputs.{}.{}` applies only to 2D scaffolds (quad, tri), but {} has {} \
                  elements, which tile into a solid already",
                 self.output,
                 thicken.key(),
                 self.source(),
                 kind.name()
-            )),
+            ))),
             _ => Ok(()),
         }
     }
@@ -298,8 +305,8 @@ impl TileStage {
         file: Option<&[u8]>,
         table: Option<&[u8]>,
         progress: &dyn StageProgress,
-        chunks: &mut (dyn FnMut(Arc<MeshChunk>) -> Result<(), String> + Send),
-    ) -> Result<TileOutput, String> {
+        chunks: &mut (dyn FnMut(Arc<MeshChunk>) -> Result<(), StageError> + Send),
+    ) -> Result<TileOutput, StageError> {
         progress.phase("reading the scaffold");
         let scaffold = self.scaffold(file)?;
         self.check_kind(scaffold.kind)?;
@@ -307,16 +314,17 @@ impl TileStage {
         let fitted = cells
             .iter()
             .map(|bytes| FittedPayload::from_bytes(bytes)?.cell(&group))
-            .collect::<Result<Vec<_>, String>>()?;
+            .collect::<Result<Vec<_>, StageError>>()?;
         let table = table.map(table_of).transpose()?;
         let sized = self.sized(&scaffold, fitted, table.as_ref())?;
         let fields = &sized.cells;
-        let nodal = |what: &str, value: &Option<NodalValue>| -> Result<Option<Vec<f64>>, String> {
-            value
-                .as_ref()
-                .map(|v| self.nodal_values(&scaffold, what, v))
-                .transpose()
-        };
+        let nodal =
+            |what: &str, value: &Option<NodalValue>| -> Result<Option<Vec<f64>>, StageError> {
+                value
+                    .as_ref()
+                    .map(|v| self.nodal_values(&scaffold, what, v))
+                    .transpose()
+            };
         let weight = nodal("by", &self.by)?;
         let thickness = match sized.thickness {
             Some(values) => Some(values),
@@ -367,20 +375,20 @@ impl TileStage {
             &mut |chunk| {
                 let chunk = Arc::new(chunk);
                 // Handed on first, so the writers encode while this thread checks.
-                chunks(Arc::clone(&chunk))?;
+                chunks(Arc::clone(&chunk)).map_err(|e| e.to_string())?;
                 // Both on the pool: the piece count is serial, the check parallel inside.
                 rayon::join(|| check.push(&chunk), || pieces.push(&chunk));
                 Ok(())
             },
         )
-        .map_err(|e| format!("tiling {}: {e}", self.source()))?;
+        .map_err(|e| StageError::geometry_of(format!("tiling {}", self.source()), e))?;
         let check = check.finish();
         if check.triangles == 0 {
-            return Err(format!(
+            return Err(StageError::EmptySolid(format!(
                 "the tiled solid of `outputs.{}` is empty: the cell has no solid part at this \
                  offset or thickness",
                 self.output
-            ));
+            )));
         }
         Ok(TileOutput::Chunked(ChunkedHead {
             sizing: sized.summary,
@@ -447,8 +455,8 @@ impl TileStage {
         scaffold: &Scaffold,
         solid: &TiledSolid,
         progress: &dyn StageProgress,
-    ) -> Result<MeshArtifact, String> {
-        let fail = |e: RegionError| format!("tiling {}: {e}", self.source());
+    ) -> Result<MeshArtifact, StageError> {
+        let fail = |e: RegionError| StageError::geometry_of(format!("tiling {}", self.source()), e);
         let scaffold_area = scaffold.measure();
         let (mesh, region, planar, scaffold_volume): (Mesh, TiledRegion, _, _) = match self.thicken
         {
@@ -472,14 +480,14 @@ impl TileStage {
                 let region =
                     tile_surface_scaffold(scaffold, solid, self.resolution).map_err(fail)?;
                 if !region.planar {
-                    return Err(format!(
+                    return Err(StageError::DoesNotFit(format!(
                         "`outputs.{}.extrude` needs a planar scaffold (every node at one z), \
                          but {} is a curved surface of {} elements: use `thickness_normal = \
                          {h}` to thicken it along its normals",
                         self.output,
                         self.source(),
                         scaffold.kind.name()
-                    ));
+                    )));
                 }
                 let mesh = if region.mesh.is_empty() {
                     Mesh::default()
@@ -494,11 +502,11 @@ impl TileStage {
             }
         };
         if region.mesh.is_empty() {
-            return Err(format!(
+            return Err(StageError::EmptySolid(format!(
                 "the tiled region of `outputs.{}` is empty: the cell has no solid part at this \
                  offset or thickness",
                 self.output
-            ));
+            )));
         }
         progress.phase("checking the mesh");
         let summary = MeshSummary::of_mesh(&mesh, planar.is_some());
@@ -527,14 +535,15 @@ impl TileStage {
         scaffold: &Scaffold,
         what: &str,
         value: &NodalValue,
-    ) -> Result<Vec<f64>, String> {
+    ) -> Result<Vec<f64>, StageError> {
         let key = match what {
             "by" => format!("outputs.{}.cell.by", self.output),
             _ => format!("outputs.{}.{what}", self.output),
         };
         let values = match value {
             NodalValue::Expr(text) => {
-                let field = expr::compile(text).map_err(|e| format!("`{key}`: {}", e.message))?;
+                let field = expr::compile(text)
+                    .map_err(|e| StageError::geometry_of(format!("`{key}`"), e))?;
                 let coordinate = |a: usize| scaffold.nodes.iter().map(|p| p[a]).collect::<Vec<_>>();
                 let mut out = vec![0.0; scaffold.nodes.len()];
                 field.eval_points(&coordinate(0), &coordinate(1), &coordinate(2), &mut out);
@@ -553,20 +562,20 @@ impl TileStage {
                     } else {
                         format!("its views are {}", views.join(", "))
                     };
-                    return Err(format!(
+                    return Err(StageError::DoesNotFit(format!(
                         "`{key}` reads node data `{view}`, but {} has no such view: {has}",
                         self.source()
-                    ));
+                    )));
                 }
             },
         };
         if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-            return Err(format!(
+            return Err(StageError::ValueOutOfRange(format!(
                 "`{key}` is {} at node {} of {}",
                 values[i],
                 scaffold.node_tags.get(i).copied().unwrap_or(i as u64),
                 self.source()
-            ));
+            )));
         }
         Ok(values)
     }
@@ -582,7 +591,7 @@ impl TileStage {
         scaffold: &Scaffold,
         fitted: Vec<latticebuild_geom::symmetric::FittedCell>,
         table: Option<&LevelTable>,
-    ) -> Result<TiledSizing, String> {
+    ) -> Result<TiledSizing, StageError> {
         let boxed = |cells: Vec<latticebuild_geom::symmetric::FittedCell>, level: Option<f64>| {
             cells
                 .into_iter()
@@ -643,7 +652,9 @@ impl TileStage {
                 }
             }
             Sizing::VolumeFraction { level, target } => {
-                let table = table.ok_or("a volume fraction needs the cell's table")?;
+                let table = table.ok_or_else(|| {
+                    StageError::Internal("a volume fraction needs the cell's table".into())
+                })?;
                 sized.cells = boxed(fitted, shell.then_some(*level));
                 match target {
                     Target::Uniform(phi) => {
@@ -659,7 +670,7 @@ impl TileStage {
                     Target::Graded(value) => {
                         let phis = self.nodal_values(scaffold, "volume_fraction", value)?;
                         if let Some(i) = phis.iter().position(|&p| !(p > 0.0 && p < 1.0)) {
-                            return Err(format!(
+                            return Err(StageError::ValueOutOfRange(format!(
                                 "`outputs.{}.volume_fraction` is {} at node {} of {}, which \
                                  cannot be reached: the reachable range is 0 < \
                                  volume_fraction < 1",
@@ -667,7 +678,7 @@ impl TileStage {
                                 phis[i],
                                 scaffold.node_tags.get(i).copied().unwrap_or(i as u64),
                                 self.source()
-                            ));
+                            )));
                         }
                         let levels = phis
                             .iter()
@@ -686,16 +697,16 @@ impl TileStage {
         Ok(sized)
     }
 
-    fn positive(&self, scaffold: &Scaffold, what: &str, values: &[f64]) -> Result<(), String> {
+    fn positive(&self, scaffold: &Scaffold, what: &str, values: &[f64]) -> Result<(), StageError> {
         match values.iter().position(|&v| v <= 0.0) {
             None => Ok(()),
-            Some(i) => Err(format!(
+            Some(i) => Err(StageError::ValueOutOfRange(format!(
                 "`outputs.{}.{what}` must be greater than 0, but it is {} at node {} of {}",
                 self.output,
                 values[i],
                 scaffold.node_tags.get(i).copied().unwrap_or(i as u64),
                 self.source()
-            )),
+            ))),
         }
     }
 }

@@ -13,6 +13,7 @@ use rayon::prelude::*;
 use latticebuild_geom::contour2d::PlanarRegion;
 use latticebuild_geom::mesh_io::{self, ChunkSource, Encoding, Format};
 
+use super::StageError;
 use super::artifact::{MeshArtifact, WrittenFile, WrittenOutput};
 use super::chunked::{ChunkedHead, is_corrupt};
 use super::measure::{self, Measures, ReportLevel};
@@ -70,7 +71,7 @@ pub enum MeshInput<'a> {
 pub enum WriteError {
     /// The chunked input's entry failed verification while being read.
     CorruptInput(String),
-    Failed(String),
+    Failed(StageError),
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -150,7 +151,10 @@ impl WriteStage {
                     if is_corrupt(&e) {
                         WriteError::CorruptInput(e.to_string())
                     } else {
-                        WriteError::Failed(format!("cannot write `{path}`: {e}"))
+                        WriteError::Failed(StageError::Output {
+                            path: path.clone(),
+                            source: e,
+                        })
                     }
                 })?;
                 Ok(WrittenFile {
@@ -194,7 +198,7 @@ impl WriteStage {
                         if is_corrupt(&e) {
                             WriteError::CorruptInput(e.to_string())
                         } else {
-                            WriteError::Failed(format!("cannot measure the mesh: {e}"))
+                            WriteError::Failed(StageError::Measure(e))
                         }
                     })?
                 }
@@ -237,7 +241,12 @@ impl WriteStage {
                     Some(svg) => w.write_all(svg.as_bytes()),
                     None => mesh_io::write_svg(&region, &planar.element, w),
                 })
-                .map_err(|e| WriteError::Failed(format!("cannot write `{path}`: {e}")))?;
+                .map_err(|e| {
+                    WriteError::Failed(StageError::Output {
+                        path: path.clone(),
+                        source: e,
+                    })
+                })?;
             files.push(WrittenFile {
                 path,
                 format: "svg".into(),

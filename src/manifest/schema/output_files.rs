@@ -106,17 +106,13 @@ pub(crate) fn check_collisions(
     }
 }
 
-/// Every directory the outputs write into: `out_dir` and those their paths add, each once.
-pub fn output_dirs(manifest: &Manifest) -> Vec<std::path::PathBuf> {
-    let mut dirs = vec![manifest.out_dir.clone()];
-    for (_, files) in files_by_output(manifest) {
-        for file in files {
-            if let Some(parent) = std::path::Path::new(&file).parent() {
-                dirs.push(manifest.out_dir.join(parent));
-            }
-        }
+/// Every file the manifest's outputs write, under `out_dir`: each format, a planar region's
+/// drawing, and the output's report.
+pub fn output_paths(manifest: &Manifest) -> Vec<std::path::PathBuf> {
+    let mut paths = Vec::new();
+    for (name, files) in files_by_output(manifest) {
+        paths.extend(files.iter().map(|file| manifest.out_dir.join(file)));
+        paths.push(manifest.out_dir.join(format!("{name}.report.json")));
     }
-    dirs.sort();
-    dirs.dedup();
-    dirs
+    paths
 }
