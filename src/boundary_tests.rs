@@ -143,7 +143,6 @@ fn layers_point_one_way() {
             if let Some(name) = banned.iter().find(|b| line.contains(*b)) {
                 offenders.push(format!("src/{file}:{n}: {name}"));
             }
-            }
         }
     }
     assert!(
