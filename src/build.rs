@@ -427,7 +427,7 @@ impl<'a> Builder<'a> {
     fn read_file(
         &mut self,
         id: NodeId,
-        file: &crate::stages::mesh::FileStage,
+        file: &crate::stages::file::FileStage,
         started: Instant,
     ) -> Result<(), BuildError> {
         let node = &self.graph.nodes[id];

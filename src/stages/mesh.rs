@@ -1,11 +1,8 @@
-//! Triangle-mesh inputs: the `file` node that brings a file's bytes into the graph, and the
-//! `cell` stage of a mesh cell, which reads, places and packs the mesh for every stage that
-//! samples a cell.
+//! Triangle-mesh cells: the `cell` stage of a mesh cell, which reads, places and packs the
+//! mesh (a `file` node's bytes, see [`super::file`]) for every stage that samples a cell.
 //!
 //! Invariants:
-//! - A `file` node's hash is the blake3 hash of the file's bytes, so every stage reading it is
-//!   keyed on the content, never on the path or the time (renaming or touching a mesh rebuilds
-//!   nothing). The builder reads the file; this module never opens paths.
+//! - This module never opens paths: the mesh arrives as the bytes of its `file` node.
 //! - A mesh cell's payload is the placed soup, little-endian `f64` positions and `u32` indices
 //!   behind a magic and the sampling mode: a pure function of the file's bytes and the cell's
 //!   keys. Reading errors name the file and the line, byte offset or face of the problem.
@@ -24,14 +21,6 @@ use crate::manifest::{MeshCell, MeshSampling};
 pub const VERSION: u32 = 1;
 
 const MESH_CELL_MAGIC: &[u8; 8] = b"LBMCEL01";
-
-/// `file`: the bytes of a mesh file named in the manifest.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FileStage {
-    /// As written in the manifest, for messages.
-    pub given: String,
-    pub path: std::path::PathBuf,
-}
 
 /// The reader format of a file name (validated by the manifest: one of the known extensions).
 fn format_of(given: &str) -> Result<Format, StageError> {

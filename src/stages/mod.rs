@@ -31,6 +31,7 @@ pub mod chunked;
 pub mod contour;
 pub mod crystal;
 pub mod error;
+pub mod file;
 pub mod islands;
 pub mod measure;
 pub mod mesh;
@@ -52,7 +53,7 @@ pub use write::{OutputSink, PendingFile, Prewritten};
 /// One node's computation, with its parameters.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Stage {
-    File(mesh::FileStage),
+    File(file::FileStage),
     Cell(cell::CellStage),
     MeshCell(mesh::MeshCellStage),
     Crystal(crystal::CrystalStage),
@@ -105,7 +106,8 @@ impl Stage {
     pub fn version(&self) -> u32 {
         match self {
             Stage::Cell(_) => cell::VERSION,
-            Stage::File(_) | Stage::MeshCell(_) => mesh::VERSION,
+            Stage::File(_) => file::VERSION,
+            Stage::MeshCell(_) => mesh::VERSION,
             Stage::Crystal(_) => crystal::VERSION,
             Stage::Sample(_) | Stage::Fit(_) | Stage::Combine(_) | Stage::Constrain(_) => {
                 symmetric::VERSION
