@@ -18,7 +18,7 @@ use std::path::Path;
 use serde::Serialize;
 
 use crate::manifest::{
-    FitResolution, Manifest, Output, ScaffoldSource, SdfResolution, TiledOutput,
+    FitResolution, Manifest, Output, ProgramResolution, ScaffoldSource, TiledOutput,
 };
 use latticebuild_geom::field::Solid;
 use latticebuild_geom::mesh_io::{Encoding, Format};
@@ -119,16 +119,16 @@ fn plain(manifest: &Manifest, name: &str, o: &Output) -> Estimate {
     }
 }
 
-fn sdf(name: &str, o: &crate::manifest::SdfOutput) -> Option<Estimate> {
+fn sdf(name: &str, o: &crate::manifest::ProgramOutput) -> Option<Estimate> {
     // Without `bounds`, a voxel size gives counts only once the program's box is known.
     let (min, max, samples) = match (o.resolution, o.bounds) {
-        (SdfResolution::Counts(samples), Some([min, max])) => (min, max, samples),
-        (SdfResolution::Counts(samples), None) => ([0.0; 3], [1.0; 3], samples),
-        (SdfResolution::Voxel(voxel), Some([min, max])) => {
+        (ProgramResolution::Counts(samples), Some([min, max])) => (min, max, samples),
+        (ProgramResolution::Counts(samples), None) => ([0.0; 3], [1.0; 3], samples),
+        (ProgramResolution::Voxel(voxel), Some([min, max])) => {
             let samples = crate::manifest::voxel_samples(min, max, voxel).ok()?;
             (min, max, samples)
         }
-        (SdfResolution::Voxel(_), None) => return None,
+        (ProgramResolution::Voxel(_), None) => return None,
     };
     Some(box_estimate(
         &format!("outputs.{name}.samples"),
@@ -229,7 +229,7 @@ pub fn estimate(manifest: &Manifest, targets: &[String]) -> Vec<(String, Estimat
     for (name, o) in manifest.outputs.iter().filter(|(n, _)| wanted(n)) {
         all.push((name.clone(), plain(manifest, name, o)));
     }
-    for (name, o) in manifest.sdf_outputs.iter().filter(|(n, _)| wanted(n)) {
+    for (name, o) in manifest.program_outputs.iter().filter(|(n, _)| wanted(n)) {
         all.extend(sdf(name, o).map(|e| (name.clone(), e)));
     }
     for (name, o) in manifest.tiled_outputs.iter().filter(|(n, _)| wanted(n)) {

@@ -864,7 +864,7 @@ impl<'a> Builder<'a> {
                 )?;
                 Ok(Value::Mesh(Arc::new(mesh)))
             }
-            Stage::Sdf(stage) => {
+            Stage::Program(stage) => {
                 let files = (0..node.inputs.len())
                     .map(bytes)
                     .collect::<Result<Vec<_>, _>>()?;
@@ -969,7 +969,7 @@ fn decode(stage: &Stage, payload: Vec<u8>) -> Option<Value> {
         | Stage::Combine(_)
         | Stage::Constrain(_)
         | Stage::Density(_) => Some(Value::Bytes(Arc::new(payload))),
-        Stage::Contour(_) | Stage::Sdf(_) | Stage::Tile(_) | Stage::Islands(_) => {
+        Stage::Contour(_) | Stage::Program(_) | Stage::Tile(_) | Stage::Islands(_) => {
             Some(Value::Mesh(Arc::new(MeshArtifact::decode(&payload).ok()?)))
         }
         Stage::Write(_) => serde_json::from_slice(&payload)

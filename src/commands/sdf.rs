@@ -25,7 +25,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use latticebuild_geom::mesh_io::{self, Encoding, Format};
-use latticebuild_geom::sdf::{
+use latticebuild_geom::stack_lang::{
     self, Aabb, ExternalField, ExternalSolids, IncludeResolver, Included, Program, Word,
 };
 
@@ -35,7 +35,7 @@ use super::Failure;
 use crate::budget;
 use crate::files::{output_problem, read_input, read_input_text, write_user_file};
 use crate::progress::NoProgress;
-use crate::stages::sdf::{box_text, contour_field, mesh_field};
+use crate::stages::program::{box_text, contour_field, mesh_field};
 
 #[derive(Args, Debug, Clone)]
 pub struct SdfArgs {
@@ -108,7 +108,7 @@ fn usage(text: impl std::fmt::Display) -> Failure {
 impl Options {
     fn extract(words: Vec<Word>) -> Result<Options, Failure> {
         let mut options = Options {
-            samples: sdf::DEFAULT_SAMPLES,
+            samples: stack_lang::DEFAULT_SAMPLES,
             domain: None,
             output: PathBuf::from("out.ply"),
             quiet: false,
@@ -148,10 +148,11 @@ impl Options {
                     )));
                 }
             };
-            let bad = |e: sdf::OptionError| usage(format_args!("{} `{flag}`: {e}", word.origin));
+            let bad =
+                |e: stack_lang::OptionError| usage(format_args!("{} `{flag}`: {e}", word.origin));
             match name {
-                "-s" => options.samples = sdf::parse_samples(&value).map_err(bad)?,
-                "-b" => options.domain = Some(sdf::parse_box(&value).map_err(bad)?),
+                "-s" => options.samples = stack_lang::parse_samples(&value).map_err(bad)?,
+                "-b" => options.domain = Some(stack_lang::parse_box(&value).map_err(bad)?),
                 _ => options.output = PathBuf::from(value),
             }
         }
@@ -185,7 +186,7 @@ pub fn run(args: &SdfArgs) -> ExitCode {
 
 fn command(args: &[String]) -> Result<(), Failure> {
     let started = Instant::now();
-    let words = sdf::expand(args, &FileIncludes).map_err(usage)?;
+    let words = stack_lang::expand(args, &FileIncludes).map_err(usage)?;
     let options = Options::extract(words)?;
     let format = output_format(&options.output)?;
     // Checked before contouring, which may take minutes: the directory is not created.

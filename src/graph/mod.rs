@@ -20,7 +20,7 @@ use crate::stages::crystal::CrystalStage;
 use crate::stages::file::FileStage;
 use crate::stages::islands::IslandsStage;
 use crate::stages::mesh::MeshCellStage;
-use crate::stages::sdf::SdfStage;
+use crate::stages::program::ProgramStage;
 use crate::stages::sizing::{DensityStage, Over};
 use crate::stages::symmetric::{Combination, CombineStage, ConstrainStage, FitStage, SampleStage};
 use crate::stages::tile::TileStage;
@@ -218,10 +218,10 @@ impl Graph {
             graph.outputs.insert(name.clone(), write);
         }
         // An SDF output: `sdf` reading a `file:` node per mesh of its program, then `write`.
-        for (name, output) in &manifest.sdf_outputs {
+        for (name, output) in &manifest.program_outputs {
             let files = output.files.iter().map(|f| compiler.file(&mut graph, f));
             let files = files.collect();
-            let stage = Stage::Sdf(SdfStage::new(output));
+            let stage = Stage::Program(ProgramStage::new(output));
             let solid = graph.push(format!("sdf:{name}"), stage, files);
             let write = WriteStage {
                 formats: output.formats.clone(),

@@ -82,7 +82,7 @@ fn check_input_files(
                 .as_ref()
                 .map(|f| (format!("outputs.{name}.within"), f, "mesh"))
         }))
-        .chain(manifest.sdf_outputs.iter().flat_map(|(name, o)| {
+        .chain(manifest.program_outputs.iter().flat_map(|(name, o)| {
             o.files
                 .iter()
                 .map(move |f| (format!("outputs.{name}.sdf"), f, "mesh"))

@@ -9,7 +9,7 @@ use latticebuild_geom::field::Solid;
 use latticebuild_geom::islands::IslandFilter;
 use latticebuild_geom::mesh_io::{Encoding, Format};
 use latticebuild_geom::scaffold::ElementKind;
-use latticebuild_geom::sdf::Program;
+use latticebuild_geom::stack_lang::Program;
 
 /// A validated manifest.
 #[derive(Clone, Debug, PartialEq)]
@@ -28,11 +28,11 @@ pub struct Manifest {
     pub outputs: BTreeMap<String, Output>,
     /// Outputs whose solid is an SDF program (`sdf = "…"`); their names differ from those of
     /// `outputs` (one `[outputs]` table holds both).
-    pub sdf_outputs: BTreeMap<String, SdfOutput>,
+    pub program_outputs: BTreeMap<String, ProgramOutput>,
     /// `[scaffolds.NAME]`: meshes (or generated grids) that cells are tiled into.
     pub scaffolds: BTreeMap<String, Scaffold>,
     /// Outputs tiling a cell into a scaffold (`scaffold = "…"`); their names differ from those
-    /// of `outputs` and `sdf_outputs`.
+    /// of `outputs` and `program_outputs`.
     pub tiled_outputs: BTreeMap<String, TiledOutput>,
     /// Every external file the manifest references (not the manifest itself), for `watch`.
     pub inputs: Vec<PathBuf>,
@@ -207,16 +207,16 @@ pub struct Output {
 
 /// An output whose solid is an SDF program in the Cesogen stack language (`sdf = "…"`).
 #[derive(Clone, Debug, PartialEq)]
-pub struct SdfOutput {
+pub struct ProgramOutput {
     pub name: Name,
-    /// The program, parsed and checked (`latticebuild_geom::sdf`).
+    /// The program, parsed and checked (`latticebuild_geom::stack_lang`).
     pub program: Program,
     /// The mesh files its `file` words name, once each in order of first use; each span is
     /// the path's word in the program string.
     pub files: Vec<InputFile>,
     /// `bounds = { min, max }`; `None`: the program's own bounds, found when it is contoured.
     pub bounds: Option<[[f64; 3]; 2]>,
-    pub resolution: SdfResolution,
+    pub resolution: ProgramResolution,
     /// Formats to write, sorted and without duplicates.
     pub formats: Vec<Format>,
     pub encoding: Encoding,
@@ -228,7 +228,7 @@ pub struct SdfOutput {
 
 /// How finely an SDF output is sampled.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum SdfResolution {
+pub enum ProgramResolution {
     /// Samples per axis, each at least 2.
     Counts([usize; 3]),
     /// Grid spacing in model units; the counts follow from the box ([`voxel_samples`]), which

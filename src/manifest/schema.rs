@@ -32,8 +32,8 @@ mod islands;
 mod keys;
 mod meshes;
 pub(crate) mod output_files;
+mod program;
 mod scaffolds;
-mod sdf;
 mod sizing;
 mod symmetry;
 
@@ -150,16 +150,16 @@ pub(crate) fn validate(
         cells: &cells,
     };
     let mut outputs = BTreeMap::new();
-    let mut sdf_outputs = BTreeMap::new();
+    let mut program_outputs = BTreeMap::new();
     let mut tiled_outputs = BTreeMap::new();
     for (key, value) in outputs_table.into_iter().flatten() {
-        if scaffolds::is_tiled_output(value) && !sdf::is_sdf_output(value) {
+        if scaffolds::is_tiled_output(value) && !program::is_sdf_output(value) {
             if let Some(output) = checker.tiled_output(key, value, &tiling) {
                 tiled_outputs.insert(output.name.text.clone(), output);
             }
-        } else if sdf::is_sdf_output(value) {
+        } else if program::is_sdf_output(value) {
             if let Some(output) = checker.sdf_output(key, value) {
-                sdf_outputs.insert(output.name.text.clone(), output);
+                program_outputs.insert(output.name.text.clone(), output);
             }
         } else if let Some(output) = checker.output(key, value, &cell_names, &cells) {
             outputs.insert(output.name.text.clone(), output);
@@ -174,7 +174,8 @@ pub(crate) fn validate(
         Some(parent) if !parent.as_os_str().is_empty() => parent.join(out_dir?),
         _ => PathBuf::from(out_dir?),
     };
-    let mut inputs = sdf::with_program_files(meshes::input_files(&cells, &outputs), &sdf_outputs);
+    let mut inputs =
+        program::with_program_files(meshes::input_files(&cells, &outputs), &program_outputs);
     inputs.extend(scaffolds::scaffold_files(&scaffolds));
     inputs.sort();
     inputs.dedup();
@@ -187,7 +188,7 @@ pub(crate) fn validate(
         inputs,
         cells,
         outputs,
-        sdf_outputs,
+        program_outputs,
         scaffolds,
         tiled_outputs,
     };

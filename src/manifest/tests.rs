@@ -948,7 +948,7 @@ fn defaults_are_filled_in() {
             },
         )]),
         outputs: BTreeMap::from([("g".to_string(), output("g", Some(41..42)))]),
-        sdf_outputs: BTreeMap::new(),
+        program_outputs: BTreeMap::new(),
         scaffolds: BTreeMap::new(),
         tiled_outputs: BTreeMap::new(),
         inputs: Vec::new(),
@@ -1283,7 +1283,7 @@ fn reference_example_is_valid() {
 mod mesh_tests;
 mod symmetry_tests;
 
-mod sdf_tests;
+mod program_tests;
 
 mod crystal_cells {
     use super::*;

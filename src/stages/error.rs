@@ -17,7 +17,7 @@ use latticebuild_geom::mesh_sdf::MeshSdfError;
 use latticebuild_geom::periodic::CrystalError;
 use latticebuild_geom::periodic::reconstruct::ReconstructError;
 use latticebuild_geom::scaffold::ScaffoldError;
-use latticebuild_geom::sdf::SdfError;
+use latticebuild_geom::stack_lang::ProgramError;
 use latticebuild_geom::symmetric::{FitError, GroupError};
 use latticebuild_geom::tile::RegionError;
 use latticebuild_geom::tile::TileError;
@@ -145,7 +145,7 @@ pub enum GeomError {
     #[error(transparent)]
     MeshSdf(#[from] MeshSdfError),
     #[error(transparent)]
-    Sdf(#[from] SdfError),
+    Sdf(#[from] ProgramError),
     #[error(transparent)]
     Group(#[from] GroupError),
     #[error(transparent)]
@@ -193,7 +193,7 @@ macro_rules! geometry_errors {
 geometry_errors!(
     MeshReadError,
     MeshSdfError,
-    SdfError,
+    ProgramError,
     GroupError,
     FitError,
     CrystalError,

@@ -35,7 +35,7 @@ pub mod file;
 pub mod islands;
 pub mod measure;
 pub mod mesh;
-pub mod sdf;
+pub mod program;
 pub mod sizing;
 pub mod symmetric;
 pub mod tile;
@@ -63,7 +63,7 @@ pub enum Stage {
     Constrain(symmetric::ConstrainStage),
     Density(sizing::DensityStage),
     Contour(contour::ContourStage),
-    Sdf(sdf::SdfStage),
+    Program(program::ProgramStage),
     Tile(tile::TileStage),
     Islands(islands::IslandsStage),
     Write(write::WriteStage),
@@ -95,7 +95,7 @@ impl Stage {
             Stage::Constrain(_) => "constrain",
             Stage::Density(_) => "density",
             Stage::Contour(_) => "contour",
-            Stage::Sdf(_) => "sdf",
+            Stage::Program(_) => "sdf",
             Stage::Tile(_) => "tile",
             Stage::Islands(_) => "islands",
             Stage::Write(_) => "write",
@@ -114,7 +114,7 @@ impl Stage {
             }
             Stage::Density(_) => sizing::VERSION,
             Stage::Contour(_) => contour::VERSION,
-            Stage::Sdf(_) => sdf::VERSION,
+            Stage::Program(_) => program::VERSION,
             Stage::Tile(_) => tile::VERSION,
             Stage::Islands(_) => islands::VERSION,
             Stage::Write(_) => write::VERSION,
@@ -135,7 +135,7 @@ impl Stage {
             Stage::Constrain(s) => s.key_params(builder),
             Stage::Density(s) => s.key_params(builder),
             Stage::Contour(s) => s.key_params(builder),
-            Stage::Sdf(s) => s.key_params(builder),
+            Stage::Program(s) => s.key_params(builder),
             Stage::Tile(s) => s.key_params(builder),
             Stage::Islands(s) => s.key_params(builder),
             Stage::Write(s) => s.key_params(builder),
@@ -162,7 +162,7 @@ impl Stage {
             Stage::Contour(_) if i == 0 => "cell".into(),
             Stage::Contour(s) if i == 1 && s.within.is_some() => "part".into(),
             Stage::Contour(_) => "density table".into(),
-            Stage::Sdf(s) => format!("file {}", s.files.get(i).map_or("?", |f| f.as_str())),
+            Stage::Program(s) => format!("file {}", s.files.get(i).map_or("?", |f| f.as_str())),
             Stage::Tile(s) if i < s.cell_inputs() => format!("cell {}", i + 1),
             Stage::Tile(s) if i == s.cell_inputs() && s.reads_file() => "scaffold".into(),
             Stage::Tile(_) => "density table".into(),

@@ -13,7 +13,7 @@ use std::time::Instant;
 use latticebuild_geom::contour::contour;
 use latticebuild_geom::expr::compile;
 use latticebuild_geom::field::{Grid, PlaneSampler, ScalarField};
-use latticebuild_geom::sdf::{self, Aabb, NoExternalSolids, Program};
+use latticebuild_geom::stack_lang::{self, Aabb, NoExternalSolids, Program};
 use latticebuild_geom::tpms;
 use rayon::prelude::*;
 
@@ -68,7 +68,7 @@ fn run_case(case: &str, n: usize) {
                 .expect("compiles");
             field.set_pruning(case == "figure6");
             let domain = Aabb::cube(4.0);
-            let mesh = sdf::mesh(&field, &domain, counts).expect("contour");
+            let mesh = stack_lang::mesh(&field, &domain, counts).expect("contour");
             let t = mesh.triangles.len();
             drop(mesh);
             (
@@ -82,7 +82,7 @@ fn run_case(case: &str, n: usize) {
                 .field(&NoExternalSolids)
                 .expect("compiles");
             let domain = field.domain();
-            let mesh = sdf::mesh(&field, &domain, counts).expect("contour");
+            let mesh = stack_lang::mesh(&field, &domain, counts).expect("contour");
             let t = mesh.triangles.len();
             drop(mesh);
             (

@@ -25,8 +25,8 @@ pub mod mesh_read;
 pub mod mesh_sdf;
 pub mod periodic;
 pub mod scaffold;
-pub mod sdf;
 pub mod spelling;
+pub mod stack_lang;
 pub mod symmetric;
 #[cfg(test)]
 mod test_meshes;

@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use latticebuild_geom::contour::ContourError;
 use latticebuild_geom::field::ScalarField;
-use latticebuild_geom::sdf::{
+use latticebuild_geom::stack_lang::{
     self, Aabb, ExternalField, ExternalSolids, NoExternalSolids, Program,
 };
 
@@ -255,7 +255,7 @@ fn a_box_whose_sides_overflow_is_an_error_not_a_mesh() {
         .expect("compiles");
     let domain = field.domain();
     assert_eq!(domain.max[0], 1e308 + 2.5);
-    let e = sdf::mesh(&field, &domain, [6, 6, 6]).expect_err("no spacing");
+    let e = stack_lang::mesh(&field, &domain, [6, 6, 6]).expect_err("no spacing");
     assert!(
         matches!(e, ContourError::BadBox(ref b) if b.starts_with("[-1e308,1e308]×")),
         "{e}"
@@ -266,12 +266,12 @@ fn a_box_whose_sides_overflow_is_an_error_not_a_mesh() {
         min: [-1e30; 3],
         max: [1e30; 3],
     };
-    let mesh = sdf::mesh(&field, &wide, [6, 6, 6]).expect("finite spacing");
+    let mesh = stack_lang::mesh(&field, &wide, [6, 6, 6]).expect("finite spacing");
     assert!(mesh.vertices.iter().flatten().all(|c| c.is_finite()));
     let beyond = Aabb {
         min: [-1e307; 3],
         max: [1e307; 3],
     };
-    let e = sdf::mesh(&field, &beyond, [6, 6, 6]).expect_err("beyond f32");
+    let e = stack_lang::mesh(&field, &beyond, [6, 6, 6]).expect_err("beyond f32");
     assert!(matches!(e, ContourError::BeyondF32 { .. }), "{e}");
 }

@@ -6,8 +6,8 @@ mod common;
 use common::sdf_sphere::SphereFile;
 use std::collections::HashMap;
 
-use latticebuild_geom::sdf::{
-    IncludeResolver, Included, NoExternalSolids, Program, SdfError, expand,
+use latticebuild_geom::stack_lang::{
+    IncludeResolver, Included, NoExternalSolids, Program, ProgramError, expand,
 };
 
 fn error(program: &str) -> String {
@@ -206,7 +206,7 @@ fn file_words_are_resolved_by_the_caller() {
         err.to_string(),
         "word 5 `file`: `file` cannot be used: cannot read `other.stl`"
     );
-    assert!(matches!(err, SdfError::File { .. }));
+    assert!(matches!(err, ProgramError::File { .. }));
     let err = Program::parse_str("file x.stl")
         .unwrap()
         .field(&NoExternalSolids)

@@ -10,7 +10,7 @@ use std::f64::consts::PI;
 
 use latticebuild_geom::field::ScalarField;
 use latticebuild_geom::mesh::Mesh;
-use latticebuild_geom::sdf::{self, Aabb, Program, SdfField, parse_box, parse_samples};
+use latticebuild_geom::stack_lang::{self, Aabb, Program, ProgramField, parse_box, parse_samples};
 use latticebuild_geom::validate::{MeshCheck, check};
 
 /// An analytic unit sphere standing in for the mesh file `part.stl`.
@@ -20,7 +20,7 @@ const FILES: SphereFile = SphereFile {
 };
 
 struct Run {
-    field: SdfField,
+    field: ProgramField,
     domain: Aabb,
     mesh: Mesh,
     check: MeshCheck,
@@ -30,7 +30,7 @@ struct Run {
 fn run(command: &str) -> Run {
     let args: Vec<&str> = command.split_whitespace().collect();
     let mut words = Vec::new();
-    let mut samples = sdf::DEFAULT_SAMPLES;
+    let mut samples = stack_lang::DEFAULT_SAMPLES;
     let mut domain = None;
     let mut i = 0;
     while i < args.len() {
@@ -47,7 +47,7 @@ fn run(command: &str) -> Run {
     }
     let field = Program::parse_args(&words).unwrap().field(&FILES).unwrap();
     let domain = domain.unwrap_or_else(|| field.domain());
-    let mesh = sdf::mesh(&field, &domain, samples).unwrap();
+    let mesh = stack_lang::mesh(&field, &domain, samples).unwrap();
     let check = check(&mesh);
     assert!(
         check.watertight && check.manifold,
@@ -62,7 +62,7 @@ fn run(command: &str) -> Run {
 }
 
 /// The volume of the solid by the share of `m³` cell centres inside it.
-fn counted_volume(field: &SdfField, domain: &Aabb, m: usize) -> f64 {
+fn counted_volume(field: &ProgramField, domain: &Aabb, m: usize) -> f64 {
     let mut inside = 0usize;
     let centre = |a: usize, i: usize| {
         domain.min[a] + (domain.max[a] - domain.min[a]) * (i as f64 + 0.5) / m as f64

@@ -6,7 +6,7 @@ mod common;
 use common::sdf_sphere::SphereFile;
 
 use latticebuild_geom::field::{Grid, ScalarField};
-use latticebuild_geom::sdf::{self, Program, SdfField};
+use latticebuild_geom::stack_lang::{self, Program, ProgramField};
 
 /// A sphere of radius 1.5 standing in for every mesh, a true distance.
 const FILES: SphereFile = SphereFile {
@@ -14,7 +14,7 @@ const FILES: SphereFile = SphereFile {
     radius: 1.5,
 };
 
-fn field(program: &str, pruning: bool) -> SdfField {
+fn field(program: &str, pruning: bool) -> ProgramField {
     let mut f = Program::parse_str(program).unwrap().field(&FILES).unwrap();
     f.set_pruning(pruning);
     f
@@ -48,10 +48,10 @@ fn pruning_never_changes_the_mesh() {
     for (program, domain) in PROGRAMS {
         let exact = field(program, false);
         let pruned = field(program, true);
-        let domain = domain.map_or_else(|| exact.domain(), |b| sdf::parse_box(b).unwrap());
+        let domain = domain.map_or_else(|| exact.domain(), |b| stack_lang::parse_box(b).unwrap());
         for counts in [[61, 61, 61], [70, 45, 53]] {
-            let a = sdf::mesh(&exact, &domain, counts).unwrap();
-            let b = sdf::mesh(&pruned, &domain, counts).unwrap();
+            let a = stack_lang::mesh(&exact, &domain, counts).unwrap();
+            let b = stack_lang::mesh(&pruned, &domain, counts).unwrap();
             assert!(!a.triangles.is_empty(), "{program}: empty");
             assert!(a == b, "{program} at {counts:?}: meshes differ");
         }
@@ -62,7 +62,7 @@ fn pruning_never_changes_the_mesh() {
 fn pruning_replaces_values_far_from_the_surface_only() {
     // Two tiny solids in a big box: most tiles are provably outside.
     let (program, domain) = PROGRAMS[4];
-    let domain = sdf::parse_box(domain.unwrap()).unwrap();
+    let domain = stack_lang::parse_box(domain.unwrap()).unwrap();
     let grid = Grid::spanning(domain.min, domain.max, [90, 90, 90]);
     let (exact, pruned) = (field(program, false), field(program, true));
     let (exact, pruned) = (exact.sampler(&grid), pruned.sampler(&grid));

@@ -3,9 +3,9 @@
 use std::f64::consts::{FRAC_1_SQRT_2, PI};
 
 use latticebuild_geom::field::{Grid, ScalarField};
-use latticebuild_geom::sdf::{NoExternalSolids, Program, SdfField};
+use latticebuild_geom::stack_lang::{NoExternalSolids, Program, ProgramField};
 
-fn field(program: &str) -> SdfField {
+fn field(program: &str) -> ProgramField {
     Program::parse_str(program)
         .unwrap_or_else(|e| panic!("{program}: {e}"))
         .field(&NoExternalSolids)

@@ -49,7 +49,7 @@ pub(crate) fn files_by_output(manifest: &Manifest) -> Vec<(&str, Vec<String>)> {
         let planar = o.planar_domain || (o.over_element && is_planar(&manifest.cells, &o.cell));
         (name.as_str(), files(&o.stem, &o.formats, planar))
     });
-    let sdf = (manifest.sdf_outputs.iter())
+    let sdf = (manifest.program_outputs.iter())
         .map(|(name, o)| (name.as_str(), files(&o.stem, &o.formats, false)));
     let tiled = manifest.tiled_outputs.iter().map(|(name, o)| {
         let planar = o.thicken.is_none() && is_planar(&manifest.cells, &o.cell);

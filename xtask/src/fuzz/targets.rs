@@ -19,7 +19,9 @@ use latticebuild::manifest;
 use latticebuild_geom::mesh_read::{self, Format};
 use latticebuild_geom::periodic::{self, ExpandOptions};
 use latticebuild_geom::scaffold::{self, Scaffold};
-use latticebuild_geom::sdf::{self, Aabb, IncludeResolver, Included, NoExternalSolids, Program};
+use latticebuild_geom::stack_lang::{
+    self, Aabb, IncludeResolver, Included, NoExternalSolids, Program,
+};
 
 /// Where a target's inputs may be written and its references resolved.
 pub struct Scratch {
@@ -195,7 +197,7 @@ fn manifest_target(bytes: &[u8], scratch: &Scratch) -> String {
                     "ok cells {} outputs {} sdf {} tiled {} scaffolds {} needed {}",
                     magnitude(m.cells.len()),
                     magnitude(m.outputs.len()),
-                    magnitude(m.sdf_outputs.len()),
+                    magnitude(m.program_outputs.len()),
                     magnitude(m.tiled_outputs.len()),
                     magnitude(m.scaffolds.len()),
                     magnitude(needed),
@@ -369,11 +371,11 @@ fn sdf_target(bytes: &[u8]) -> String {
     let Ok(text) = std::str::from_utf8(bytes) else {
         return "not UTF-8".into();
     };
-    let words = match sdf::split_words(text) {
+    let words = match stack_lang::split_words(text) {
         Ok(w) => w,
         Err(_) => return "unclosed quote".into(),
     };
-    let words = match sdf::expand(&words, &SelfInclude(text)) {
+    let words = match stack_lang::expand(&words, &SelfInclude(text)) {
         Ok(w) => w,
         Err(e) => return e.to_string(),
     };
@@ -403,9 +405,9 @@ fn sdf_target(bytes: &[u8]) -> String {
     let (leaves, ops) = field.plan_size();
     let contoured = if finite_box(&domain) {
         // sdf/mod.rs and sampler.rs: pruning never changes the mesh.
-        let pruned = sdf::mesh(&field, &domain, [6, 6, 6]);
+        let pruned = stack_lang::mesh(&field, &domain, [6, 6, 6]);
         field.set_pruning(false);
-        let plain = sdf::mesh(&field, &domain, [6, 6, 6]);
+        let plain = stack_lang::mesh(&field, &domain, [6, 6, 6]);
         match (pruned, plain) {
             (Ok(a), Ok(b)) => {
                 assert!(

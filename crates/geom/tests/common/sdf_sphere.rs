@@ -3,7 +3,7 @@
 use std::sync::Arc;
 
 use latticebuild_geom::field::ScalarField;
-use latticebuild_geom::sdf::{Aabb, ExternalField, ExternalSolids};
+use latticebuild_geom::stack_lang::{Aabb, ExternalField, ExternalSolids};
 
 /// The sphere of `radius` at the origin, a true signed distance.
 pub struct Sphere {

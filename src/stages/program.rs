@@ -4,7 +4,7 @@
 //!
 //! Invariants:
 //! - The stage is a pure function of its program, box, resolution and the bytes of its `file`
-//!   meshes (its inputs, in the order of [`SdfStage::files`]). Its key holds the program's
+//!   meshes (its inputs, in the order of [`ProgramStage::files`]). Its key holds the program's
 //!   canonical text with each path replaced by its input's number and extension, so renaming
 //!   or touching a mesh reruns nothing, while editing it does.
 //! - A solid with no surface in its box is an error, not an empty file.
@@ -14,13 +14,15 @@ use std::sync::Arc;
 use latticebuild_geom::mesh::Mesh;
 use latticebuild_geom::mesh_read;
 use latticebuild_geom::mesh_sdf::{MeshSdf, SdfOptions};
-use latticebuild_geom::sdf::{self, Aabb, ExternalField, ExternalSolids, Program, SdfField};
+use latticebuild_geom::stack_lang::{
+    self, Aabb, ExternalField, ExternalSolids, Program, ProgramField,
+};
 use latticebuild_geom::validate::{self, MeshCheck};
 
 use super::StageError;
 use super::artifact::{MeshArtifact, MeshSummary};
 use crate::cache::{KeyBuilder, Param};
-use crate::manifest::{SdfOutput, SdfResolution, voxel_samples};
+use crate::manifest::{ProgramOutput, ProgramResolution, voxel_samples};
 use crate::progress::StageProgress;
 
 /// 2: the summary counts the mesh's connected pieces.
@@ -50,7 +52,7 @@ pub struct Contoured {
 /// Contours `field` over `bounds` (its own bounds, with the paper's box rule, when `None`) at
 /// the samples `samples` gives for that box.
 pub fn contour_field(
-    field: &SdfField,
+    field: &ProgramField,
     bounds: Option<Aabb>,
     samples: &dyn Fn(&Aabb) -> Result<[usize; 3], StageError>,
     progress: &dyn StageProgress,
@@ -58,7 +60,7 @@ pub fn contour_field(
     let domain = bounds.unwrap_or_else(|| field.domain());
     let counts = samples(&domain)?;
     progress.phase("contouring");
-    let mesh = sdf::mesh_with_progress(field, &domain, counts, &|n| progress.advance(n))?;
+    let mesh = stack_lang::mesh_with_progress(field, &domain, counts, &|n| progress.advance(n))?;
     if mesh.is_empty() {
         return Err(StageError::EmptySolid(format!(
             "the solid has no surface in the box {}",
@@ -85,13 +87,13 @@ pub fn box_text(b: &Aabb) -> String {
 
 /// `sdf`: an SDF output's program, contoured.
 #[derive(Clone, Debug, PartialEq)]
-pub struct SdfStage {
+pub struct ProgramStage {
     pub program: Program,
     /// The paths of the `file` words as written, once each: input `i` holds the bytes of
     /// `files[i]`.
     pub files: Vec<String>,
     pub bounds: Option<[[f64; 3]; 2]>,
-    pub resolution: SdfResolution,
+    pub resolution: ProgramResolution,
 }
 
 /// The `file` words' meshes, from their inputs' bytes.
@@ -112,9 +114,9 @@ impl ExternalSolids for InputMeshes<'_> {
     }
 }
 
-impl SdfStage {
-    pub fn new(output: &SdfOutput) -> SdfStage {
-        SdfStage {
+impl ProgramStage {
+    pub fn new(output: &ProgramOutput) -> ProgramStage {
+        ProgramStage {
             program: output.program.clone(),
             files: output.files.iter().map(|f| f.given.clone()).collect(),
             bounds: output.bounds,
@@ -137,8 +139,10 @@ impl SdfStage {
             None => Param::Str("auto".into()),
         };
         let (samples, voxel) = match self.resolution {
-            SdfResolution::Counts(c) => (c.iter().map(|&n| Param::U64(n as u64)).collect(), 0.0),
-            SdfResolution::Voxel(h) => (Vec::new(), h),
+            ProgramResolution::Counts(c) => {
+                (c.iter().map(|&n| Param::U64(n as u64)).collect(), 0.0)
+            }
+            ProgramResolution::Voxel(h) => (Vec::new(), h),
         };
         key.param("program", self.program.canonical_with(&file_key))
             .param("bounds", bounds)
@@ -146,14 +150,14 @@ impl SdfStage {
             .param("voxel", voxel)
     }
 
-    /// Progress steps of [`SdfStage::run`] (cube layers), when known before it runs.
+    /// Progress steps of [`ProgramStage::run`] (cube layers), when known before it runs.
     pub fn steps(&self) -> u64 {
         match (self.resolution, self.bounds) {
-            (SdfResolution::Counts(c), _) => c[2] as u64 - 1,
-            (SdfResolution::Voxel(h), Some([min, max])) => {
+            (ProgramResolution::Counts(c), _) => c[2] as u64 - 1,
+            (ProgramResolution::Voxel(h), Some([min, max])) => {
                 voxel_samples(min, max, h).map_or(0, |c| c[2] as u64 - 1)
             }
-            (SdfResolution::Voxel(_), None) => 0,
+            (ProgramResolution::Voxel(_), None) => 0,
         }
     }
 
@@ -171,8 +175,8 @@ impl SdfStage {
         let field = self.program.field(&meshes)?;
         let bounds = self.bounds.map(|[min, max]| Aabb { min, max });
         let samples = |domain: &Aabb| match self.resolution {
-            SdfResolution::Counts(c) => Ok(c),
-            SdfResolution::Voxel(h) => voxel_samples(domain.min, domain.max, h).map_err(|_| {
+            ProgramResolution::Counts(c) => Ok(c),
+            ProgramResolution::Voxel(h) => voxel_samples(domain.min, domain.max, h).map_err(|_| {
                 StageError::ValueOutOfRange(format!(
                     "`voxel = {h}` gives too many samples for the box {}",
                     box_text(domain)

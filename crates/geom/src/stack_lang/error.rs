@@ -10,7 +10,7 @@ use super::words::At;
 
 /// A problem with an SDF program.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum SdfError {
+pub enum ProgramError {
     #[error(
         "the program is empty: start it with a solid such as `ball`, `tpms.gyroid` or `expression \"…\"`"
     )]
@@ -81,25 +81,25 @@ pub enum SdfError {
     UnclosedQuote { file: Option<Arc<str>>, byte: usize },
 }
 
-impl SdfError {
+impl ProgramError {
     /// The word at fault, when the error concerns one.
     pub fn at(&self) -> Option<&At> {
         match self {
-            SdfError::UnknownWord { at, .. }
-            | SdfError::UnknownTpms { at, .. }
-            | SdfError::MissingArgument { at, .. }
-            | SdfError::BadArgument { at, .. }
-            | SdfError::BadExpression { at, .. }
-            | SdfError::Underflow { at, .. }
-            | SdfError::Leftover { at, .. }
-            | SdfError::File { at, .. }
-            | SdfError::UnexpandedInclude { at }
-            | SdfError::IncludeRead { at, .. }
-            | SdfError::IncludeCycle { at, .. }
-            | SdfError::IncludeTooDeep { at, .. } => Some(at),
-            SdfError::Empty | SdfError::TooManyWords { .. } | SdfError::UnclosedQuote { .. } => {
-                None
-            }
+            ProgramError::UnknownWord { at, .. }
+            | ProgramError::UnknownTpms { at, .. }
+            | ProgramError::MissingArgument { at, .. }
+            | ProgramError::BadArgument { at, .. }
+            | ProgramError::BadExpression { at, .. }
+            | ProgramError::Underflow { at, .. }
+            | ProgramError::Leftover { at, .. }
+            | ProgramError::File { at, .. }
+            | ProgramError::UnexpandedInclude { at }
+            | ProgramError::IncludeRead { at, .. }
+            | ProgramError::IncludeCycle { at, .. }
+            | ProgramError::IncludeTooDeep { at, .. } => Some(at),
+            ProgramError::Empty
+            | ProgramError::TooManyWords { .. }
+            | ProgramError::UnclosedQuote { .. } => None,
         }
     }
 }

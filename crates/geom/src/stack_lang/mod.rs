@@ -2,7 +2,7 @@
 //! §2 and §4.2–4.3): parse a program, find its bounds, and evaluate or sample its field.
 //!
 //! ```text
-//! words ──include::expand──▶ words ──parse──▶ Tree ──SdfField::new──▶ SdfField: ScalarField
+//! words ──include::expand──▶ words ──parse──▶ Tree ──ProgramField::new──▶ ProgramField: ScalarField
 //!  (@file)                  (positions kept)   │ canonical()   (files resolved, bounds,
 //!                                              ▼               compiled plan, tile sampler)
 //!                                         cache keys
@@ -43,7 +43,7 @@
 //! Invariants of the module:
 //! - No paths, no IO: `@file` includes go through an [`IncludeResolver`] and `file` words
 //!   through [`ExternalSolids`], both supplied by the caller.
-//! - Errors are [`SdfError`]s naming the word at fault by position and text; nothing here
+//! - Errors are [`ProgramError`]s naming the word at fault by position and text; nothing here
 //!   panics on any program.
 //! - The TPMS and expression leaves are never assumed to be distances: bounds treat them as
 //!   unbounded, and tiles are skipped only when interval arithmetic proves the sign of the
@@ -68,9 +68,9 @@ mod words;
 pub use affine::Affine;
 pub use args::{constant, constants, split_components, vector3};
 pub use bounds::Aabb;
-pub use error::SdfError;
+pub use error::ProgramError;
 pub use external::{ExternalField, ExternalSolids, NoExternalSolids};
-pub use field::SdfField;
+pub use field::ProgramField;
 pub use include::{IncludeResolver, Included, MAX_DEPTH, MAX_WORDS, expand};
 pub use options::{MAX_SAMPLES_PER_AXIS, OptionError, parse_box, parse_samples, spread_samples};
 pub use parse::{BINARY_WORDS, SOLID_WORDS, UNARY_WORDS};
@@ -93,22 +93,22 @@ pub struct Program {
 
 impl Program {
     /// Parses words that carry their origins (from [`expand`], or [`Word::args`]).
-    pub fn parse(words: &[Word]) -> Result<Program, SdfError> {
+    pub fn parse(words: &[Word]) -> Result<Program, ProgramError> {
         Ok(Program {
             tree: parse::parse(words)?,
         })
     }
 
     /// Parses a list of words, e.g. command-line arguments (without `@file` includes).
-    pub fn parse_args<S: AsRef<str>>(args: &[S]) -> Result<Program, SdfError> {
+    pub fn parse_args<S: AsRef<str>>(args: &[S]) -> Result<Program, ProgramError> {
         Program::parse(&Word::args(args))
     }
 
     /// Parses program text: words separated by whitespace, quotes grouping words
     /// (`expression "x + y"`), as in a manifest's `sdf = "…"`.
-    pub fn parse_str(text: &str) -> Result<Program, SdfError> {
+    pub fn parse_str(text: &str) -> Result<Program, ProgramError> {
         let words =
-            split_words(text).map_err(|byte| SdfError::UnclosedQuote { file: None, byte })?;
+            split_words(text).map_err(|byte| ProgramError::UnclosedQuote { file: None, byte })?;
         Program::parse_args(&words)
     }
 
@@ -133,21 +133,21 @@ impl Program {
     }
 
     /// The compiled field, with `file` words resolved by `externals`.
-    pub fn field(&self, externals: &dyn ExternalSolids) -> Result<SdfField, SdfError> {
-        SdfField::new(&self.tree, externals)
+    pub fn field(&self, externals: &dyn ExternalSolids) -> Result<ProgramField, ProgramError> {
+        ProgramField::new(&self.tree, externals)
     }
 }
 
 /// Contours `field` on the grid of `counts` samples spanning `domain`, with the solid capped
 /// on the domain's faces.
-pub fn mesh(field: &SdfField, domain: &Aabb, counts: [usize; 3]) -> Result<Mesh, ContourError> {
+pub fn mesh(field: &ProgramField, domain: &Aabb, counts: [usize; 3]) -> Result<Mesh, ContourError> {
     mesh_with_progress(field, domain, counts, &|_| {})
 }
 
 /// [`mesh`], calling `progress(n)` as each `n` more layers of cubes (of `counts[2] − 1`) are
 /// done.
 pub fn mesh_with_progress(
-    field: &SdfField,
+    field: &ProgramField,
     domain: &Aabb,
     counts: [usize; 3],
     progress: &(dyn Fn(usize) + Sync),

@@ -1,5 +1,5 @@
 //! The schema of SDF outputs: `sdf = "…"`, a program in the Cesogen stack language
-//! (`latticebuild_geom::sdf`), with `bounds`, `samples` or `voxel`, and the write keys.
+//! (`latticebuild_geom::stack_lang`), with `bounds`, `samples` or `voxel`, and the write keys.
 //!
 //! A child of `schema.rs` (it extends its `Checker`). Invariants:
 //! - An output has `cell` or `sdf`, never both; the keys of cell outputs (`domain`, `solid`,
@@ -16,11 +16,11 @@ use std::collections::BTreeMap;
 use std::ops::Range;
 use std::path::PathBuf;
 
-use latticebuild_geom::sdf::{self as lang, Op, Origin, Program, SdfError, Word};
+use latticebuild_geom::stack_lang::{self as lang, Op, Origin, Program, ProgramError, Word};
 use toml::de::DeValue;
 
 use super::super::expression;
-use super::super::model::{InputFile, SdfOutput, SdfResolution, voxel_samples};
+use super::super::model::{InputFile, ProgramOutput, ProgramResolution, voxel_samples};
 use super::keys::{DOMAIN_KEYS, OUTPUT_KEYS};
 use super::meshes::MESH_FILES;
 use super::{Checker, Fields, Key, Value};
@@ -79,7 +79,7 @@ pub(super) fn is_sdf_output(value: &Value<'_>) -> bool {
 /// `inputs` with the mesh files of every program, sorted, once each.
 pub(super) fn with_program_files(
     mut inputs: Vec<PathBuf>,
-    outputs: &BTreeMap<String, SdfOutput>,
+    outputs: &BTreeMap<String, ProgramOutput>,
 ) -> Vec<PathBuf> {
     inputs.extend(
         outputs
@@ -93,7 +93,7 @@ pub(super) fn with_program_files(
 
 impl Checker<'_, '_, '_> {
     /// An output with `sdf = "…"`; `None` when anything was reported.
-    pub(super) fn sdf_output(&mut self, key: &Key<'_>, value: &Value<'_>) -> Option<SdfOutput> {
+    pub(super) fn sdf_output(&mut self, key: &Key<'_>, value: &Value<'_>) -> Option<ProgramOutput> {
         let before = self.report.len();
         let name = key.get_ref().as_ref();
         self.check_name("output", key);
@@ -124,7 +124,7 @@ impl Checker<'_, '_, '_> {
         }
         let (program, files) = program?;
         let written = written?;
-        Some(SdfOutput {
+        Some(ProgramOutput {
             name: self.name(key),
             program,
             files,
@@ -170,7 +170,7 @@ impl Checker<'_, '_, '_> {
         let words = match lang::split_words_spanned(text) {
             Ok(words) => words,
             Err(byte) => {
-                let err = SdfError::UnclosedQuote { file: None, byte };
+                let err = ProgramError::UnclosedQuote { file: None, byte };
                 self.program_error(key, at(char_at(byte)), &err.to_string(), None);
                 return None;
             }
@@ -189,7 +189,7 @@ impl Checker<'_, '_, '_> {
                     _ => None,
                 };
                 let span = match (word, &err) {
-                    (Some((w, range)), SdfError::BadExpression { byte, .. }) => {
+                    (Some((w, range)), ProgramError::BadExpression { byte, .. }) => {
                         match formula_start(text, range, w) {
                             Some(start) => at(char_at(start + (*byte).min(w.len()))),
                             None => at(range.clone()),
@@ -199,7 +199,7 @@ impl Checker<'_, '_, '_> {
                     (None, _) => at(0..text.len()),
                 };
                 let help = match err {
-                    SdfError::UnexpandedInclude { .. } => Some(
+                    ProgramError::UnexpandedInclude { .. } => Some(
                         "`@file` includes are read by `latticebuild sdf` only; write the words \
                          into the string",
                     ),
@@ -286,10 +286,10 @@ impl Checker<'_, '_, '_> {
         within: &str,
         fields: &Fields<'_, '_>,
         bounds: Option<[[f64; 3]; 2]>,
-    ) -> Option<SdfResolution> {
+    ) -> Option<ProgramResolution> {
         let path = |k: &str| format!("outputs.{output}.{k}");
         match (fields.get("samples"), fields.get("voxel")) {
-            (None, None) => Some(SdfResolution::Counts(lang::DEFAULT_SAMPLES)),
+            (None, None) => Some(ProgramResolution::Counts(lang::DEFAULT_SAMPLES)),
             (Some((_, samples)), Some((_, voxel))) => {
                 let (later, earlier) = if voxel.span().start > samples.span().start {
                     (voxel, "samples")
@@ -317,7 +317,7 @@ impl Checker<'_, '_, '_> {
                             ("an integer", "an array of 3 integers"),
                             Self::sample_count,
                         )?;
-                        return Some(SdfResolution::Counts(counts));
+                        return Some(ProgramResolution::Counts(counts));
                     }
                     _ => {
                         let help = "write a total like `samples = \"130^3\"` or counts per axis \
@@ -327,7 +327,7 @@ impl Checker<'_, '_, '_> {
                     }
                 };
                 match lang::parse_samples(&total) {
-                    Ok(counts) => Some(SdfResolution::Counts(counts)),
+                    Ok(counts) => Some(ProgramResolution::Counts(counts)),
                     Err(lang::OptionError::TooManySamples { count, axis, .. }) => {
                         self.error(
                             v.span(),
@@ -357,10 +357,10 @@ impl Checker<'_, '_, '_> {
                 let key = path("voxel");
                 let voxel = self.positive_number(&key, v, "a number")?;
                 let Some([min, max]) = bounds else {
-                    return Some(SdfResolution::Voxel(voxel));
+                    return Some(ProgramResolution::Voxel(voxel));
                 };
                 match voxel_samples(min, max, voxel) {
-                    Ok(counts) => Some(SdfResolution::Counts(counts)),
+                    Ok(counts) => Some(ProgramResolution::Counts(counts)),
                     Err(axis) => {
                         self.voxel_too_small(&key, v, axis);
                         None

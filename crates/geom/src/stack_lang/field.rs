@@ -1,4 +1,4 @@
-//! [`SdfField`]: a parsed program with its `file` solids resolved, compiled once, ready to be
+//! [`ProgramField`]: a parsed program with its `file` solids resolved, compiled once, ready to be
 //! evaluated at points or sampled on grids by the contourer.
 //!
 //! Invariants:
@@ -12,7 +12,7 @@ use std::sync::Arc;
 
 use super::bounds::{Aabb, ExternalBounds, solid_bounds};
 use super::compile::{Leaf, Plan, ValueOp};
-use super::error::SdfError;
+use super::error::ProgramError;
 use super::external::{ExternalField, ExternalSolids};
 use super::machine::{self, BLOCK, Stack};
 use super::sampler::SdfSampler;
@@ -21,15 +21,15 @@ use super::words::Origin;
 use crate::field::{Grid, PlaneSampler, ScalarField};
 
 /// A compiled SDF program.
-pub struct SdfField {
+pub struct ProgramField {
     plan: Plan,
     bounds: Aabb,
     pruning: bool,
 }
 
-impl SdfField {
+impl ProgramField {
     /// Resolves the `file` words of `tree` through `externals` and compiles it.
-    pub fn new(tree: &Tree, externals: &dyn ExternalSolids) -> Result<SdfField, SdfError> {
+    pub fn new(tree: &Tree, externals: &dyn ExternalSolids) -> Result<ProgramField, ProgramError> {
         let nodes = tree.nodes();
         let mut resolved: Vec<Option<Arc<dyn ExternalField>>> = vec![None; nodes.len()];
         for (n, node) in nodes.iter().enumerate() {
@@ -38,12 +38,13 @@ impl SdfField {
                     Origin::File { file, .. } => Some(&**file),
                     Origin::Arg(_) => None,
                 };
-                let field = externals
-                    .resolve(path, from)
-                    .map_err(|message| SdfError::File {
-                        at: node.at.clone(),
-                        message,
-                    })?;
+                let field =
+                    externals
+                        .resolve(path, from)
+                        .map_err(|message| ProgramError::File {
+                            at: node.at.clone(),
+                            message,
+                        })?;
                 resolved[n] = Some(field);
             }
         }
@@ -59,7 +60,7 @@ impl SdfField {
                 is_distance: f.is_distance(),
             }
         });
-        Ok(SdfField {
+        Ok(ProgramField {
             plan: Plan::new(tree, &field_of),
             bounds,
             pruning: true,
@@ -96,7 +97,7 @@ impl SdfField {
     }
 }
 
-impl ScalarField for SdfField {
+impl ScalarField for ProgramField {
     fn eval_points(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
         let len = out.len();
         assert!(

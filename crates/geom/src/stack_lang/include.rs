@@ -14,7 +14,7 @@
 
 use std::sync::Arc;
 
-use super::error::SdfError;
+use super::error::ProgramError;
 use super::words::{Origin, Word, split_words};
 
 /// Deepest nesting of includes.
@@ -41,7 +41,7 @@ pub trait IncludeResolver {
 pub fn expand<S: AsRef<str>>(
     args: &[S],
     resolver: &dyn IncludeResolver,
-) -> Result<Vec<Word>, SdfError> {
+) -> Result<Vec<Word>, ProgramError> {
     let mut out = Vec::new();
     let mut chain = Vec::new();
     for (i, arg) in args.iter().enumerate() {
@@ -57,36 +57,36 @@ fn expand_word(
     resolver: &dyn IncludeResolver,
     chain: &mut Vec<String>,
     out: &mut Vec<Word>,
-) -> Result<(), SdfError> {
+) -> Result<(), ProgramError> {
     let Some(name) = word.text.strip_prefix('@') else {
         if out.len() >= MAX_WORDS {
-            return Err(SdfError::TooManyWords { limit: MAX_WORDS });
+            return Err(ProgramError::TooManyWords { limit: MAX_WORDS });
         }
         out.push(word);
         return Ok(());
     };
     if chain.len() >= MAX_DEPTH {
-        return Err(SdfError::IncludeTooDeep {
+        return Err(ProgramError::IncludeTooDeep {
             at: word.at(),
             limit: MAX_DEPTH,
         });
     }
     let included = resolver
         .read(name, from)
-        .map_err(|message| SdfError::IncludeRead {
+        .map_err(|message| ProgramError::IncludeRead {
             at: word.at(),
             message,
         })?;
     if let Some(first) = chain.iter().position(|id| *id == included.id) {
         let mut cycle = chain[first..].to_vec();
         cycle.push(included.id);
-        return Err(SdfError::IncludeCycle {
+        return Err(ProgramError::IncludeCycle {
             at: word.at(),
             chain: cycle,
         });
     }
     let file: Arc<str> = included.id.as_str().into();
-    let words = split_words(&included.text).map_err(|byte| SdfError::UnclosedQuote {
+    let words = split_words(&included.text).map_err(|byte| ProgramError::UnclosedQuote {
         file: Some(file.clone()),
         byte,
     })?;
@@ -171,7 +171,7 @@ mod tests {
         let files = Files(HashMap::from([("self", "ball @self")]));
         assert!(matches!(
             expand(&["@self"], &files),
-            Err(SdfError::IncludeCycle { .. })
+            Err(ProgramError::IncludeCycle { .. })
         ));
     }
 

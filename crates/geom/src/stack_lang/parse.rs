@@ -12,7 +12,7 @@
 //! - Every argument is checked here, so a [`Tree`] is always meaningful (see `tree.rs`).
 
 use super::args;
-use super::error::SdfError;
+use super::error::ProgramError;
 use super::tree::{Node, Op, Tree};
 use super::words::{At, Word};
 use crate::spelling::closest;
@@ -50,7 +50,7 @@ const SYNONYMS: [(&str, &str); 12] = [
 ];
 
 /// Parses a program given as words.
-pub fn parse(words: &[Word]) -> Result<Tree, SdfError> {
+pub fn parse(words: &[Word]) -> Result<Tree, ProgramError> {
     let mut parser = Parser {
         words,
         next: 0,
@@ -61,13 +61,13 @@ pub fn parse(words: &[Word]) -> Result<Tree, SdfError> {
         parser.word(word)?;
     }
     match parser.stack.len() {
-        0 => Err(SdfError::Empty),
+        0 => Err(ProgramError::Empty),
         1 => Ok(Tree {
             nodes: parser.nodes,
         }),
         count => {
             let first_unused = parser.stack[0];
-            Err(SdfError::Leftover {
+            Err(ProgramError::Leftover {
                 at: parser.nodes[first_unused].at.clone(),
                 count,
             })
@@ -110,24 +110,24 @@ impl<'w> Parser<'w> {
         op: &Word,
         word: &'static str,
         expected: &'static str,
-    ) -> Result<&'w Word, SdfError> {
-        self.take().ok_or_else(|| SdfError::MissingArgument {
+    ) -> Result<&'w Word, ProgramError> {
+        self.take().ok_or_else(|| ProgramError::MissingArgument {
             at: op.at(),
             word,
             expected,
         })
     }
 
-    /// The argument of `op` read by `read`; its failure becomes a [`SdfError::BadArgument`].
+    /// The argument of `op` read by `read`; its failure becomes a [`ProgramError::BadArgument`].
     fn read<T>(
         &mut self,
         op: &Word,
         word: &'static str,
         expected: &'static str,
         read: impl FnOnce(&str) -> Result<T, String>,
-    ) -> Result<T, SdfError> {
+    ) -> Result<T, ProgramError> {
         let arg = self.argument(op, word, expected)?;
-        read(&arg.text).map_err(|problem| SdfError::BadArgument {
+        read(&arg.text).map_err(|problem| ProgramError::BadArgument {
             at: arg.at(),
             word,
             expected,
@@ -135,14 +135,14 @@ impl<'w> Parser<'w> {
         })
     }
 
-    fn word(&mut self, word: &'w Word) -> Result<(), SdfError> {
+    fn word(&mut self, word: &'w Word) -> Result<(), ProgramError> {
         let at = word.at();
         let lower = word.text.to_lowercase();
         if lower.starts_with('@') {
-            return Err(SdfError::UnexpandedInclude { at });
+            return Err(ProgramError::UnexpandedInclude { at });
         }
         if let Some(name) = lower.strip_prefix("tpms.") {
-            let surface = tpms::lookup(name).ok_or_else(|| SdfError::UnknownTpms {
+            let surface = tpms::lookup(name).ok_or_else(|| ProgramError::UnknownTpms {
                 at: at.clone(),
                 name: name.to_string(),
                 help: match tpms::suggest(name) {
@@ -170,7 +170,7 @@ impl<'w> Parser<'w> {
                 .find(|w| **w == lower)
                 .copied()
                 .unwrap_or("this word");
-            return Err(SdfError::Underflow {
+            return Err(ProgramError::Underflow {
                 at,
                 word: name,
                 needs: arity,
@@ -184,12 +184,13 @@ impl<'w> Parser<'w> {
             "expression" => {
                 const EXPECTED: &str = "a formula in x, y, z";
                 let arg = self.argument(word, "expression", EXPECTED)?;
-                let expr = crate::expr::parse(&arg.text).map_err(|e| SdfError::BadExpression {
-                    at: arg.at(),
-                    byte: e.span.start,
-                    message: e.message,
-                    help: e.help.map(|h| format!("; {h}")).unwrap_or_default(),
-                })?;
+                let expr =
+                    crate::expr::parse(&arg.text).map_err(|e| ProgramError::BadExpression {
+                        at: arg.at(),
+                        byte: e.span.start,
+                        message: e.message,
+                        help: e.help.map(|h| format!("; {h}")).unwrap_or_default(),
+                    })?;
                 let text = arg.text.clone();
                 Op::Expression { text, expr }
             }
@@ -276,7 +277,7 @@ impl<'w> Parser<'w> {
     }
 }
 
-fn unknown(word: &Word) -> SdfError {
+fn unknown(word: &Word) -> ProgramError {
     let text = &word.text;
     let lower = text.to_lowercase();
     let help = if args::constant(text).is_ok() {
@@ -299,7 +300,7 @@ fn unknown(word: &Word) -> SdfError {
                 .to_string(),
         }
     };
-    SdfError::UnknownWord {
+    ProgramError::UnknownWord {
         at: word.at(),
         help,
     }

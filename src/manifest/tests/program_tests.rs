@@ -2,7 +2,7 @@
 //! with their exact diagnostics (each at the word of the program it concerns), then valid ones.
 
 use super::*;
-use crate::manifest::{SdfResolution, voxel_samples};
+use crate::manifest::{ProgramResolution, voxel_samples};
 
 const SDF_ERR_CASES: &[ErrCase] = &[ErrCase {
     name: "program errors at their words, cell keys beside `sdf`, samples, bounds, quotes, escapes",
@@ -106,7 +106,7 @@ fn an_sdf_output_is_parsed_with_its_files_and_defaults() {
         &[],
     );
     assert!(manifest.outputs.is_empty());
-    let out = &manifest.sdf_outputs["fill"];
+    let out = &manifest.program_outputs["fill"];
     assert_eq!(
         out.program.canonical(),
         "tpms.neovius scale 0.065 file meshes/part.STL intersection file meshes/part.STL union"
@@ -119,7 +119,7 @@ fn an_sdf_output_is_parsed_with_its_files_and_defaults() {
     assert_eq!(out.files[0].span.len(), "meshes/part.STL".len());
     assert_eq!(out.bounds, None);
     // Cesogen's default: 60³ samples.
-    assert_eq!(out.resolution, SdfResolution::Counts([60; 3]));
+    assert_eq!(out.resolution, ProgramResolution::Counts([60; 3]));
     assert_eq!(
         manifest.inputs,
         [std::path::PathBuf::from("./meshes/part.STL")]
@@ -132,23 +132,32 @@ fn samples_are_totals_counts_or_a_voxel() {
         let text = format!(
             "[outputs.s]\nsdf = \"ball scale 2\"\nbounds = {{ min = [-2, -2, -2], max = [2, 2, 3] }}\n{samples}\n"
         );
-        parse_ok(&text, &[]).sdf_outputs["s"].resolution
+        parse_ok(&text, &[]).program_outputs["s"].resolution
     };
-    assert_eq!(with("samples = \"130^3\""), SdfResolution::Counts([130; 3]));
+    assert_eq!(
+        with("samples = \"130^3\""),
+        ProgramResolution::Counts([130; 3])
+    );
     // A number is a total, spread as evenly as possible without exceeding it (Cesogen's `-s`).
-    assert_eq!(with("samples = 2000"), SdfResolution::Counts([13, 12, 12]));
+    assert_eq!(
+        with("samples = 2000"),
+        ProgramResolution::Counts([13, 12, 12])
+    );
     assert_eq!(
         with("samples = \"100,50,20\""),
-        SdfResolution::Counts([100, 50, 20])
+        ProgramResolution::Counts([100, 50, 20])
     );
     assert_eq!(
         with("samples = [7, 8, 9]"),
-        SdfResolution::Counts([7, 8, 9])
+        ProgramResolution::Counts([7, 8, 9])
     );
     // With bounds, a voxel gives counts at load: extents 4, 4, 5 over 0.5.
-    assert_eq!(with("voxel = 0.5"), SdfResolution::Counts([9, 9, 11]));
+    assert_eq!(with("voxel = 0.5"), ProgramResolution::Counts([9, 9, 11]));
     let auto = parse_ok("[outputs.s]\nsdf = \"ball\"\nvoxel = 0.25\n", &[]);
-    assert_eq!(auto.sdf_outputs["s"].resolution, SdfResolution::Voxel(0.25));
+    assert_eq!(
+        auto.program_outputs["s"].resolution,
+        ProgramResolution::Voxel(0.25)
+    );
     assert_eq!(voxel_samples([-1.0; 3], [1.0; 3], 0.25), Ok([9; 3]));
     assert_eq!(voxel_samples([0.0; 3], [1.0; 3], 1e-9), Err(0));
 }
@@ -187,18 +196,18 @@ fn set_replaces_the_program_and_its_samples() {
             "outputs.b.samples=40^3",
         ],
     );
-    let out = &manifest.sdf_outputs["b"];
+    let out = &manifest.program_outputs["b"];
     assert_eq!(
         out.program.canonical(),
         "cylinder orient 1.0,0.0,0.0 scale 0.5"
     );
-    assert_eq!(out.resolution, SdfResolution::Counts([40; 3]));
+    assert_eq!(out.resolution, ProgramResolution::Counts([40; 3]));
     let bounds = parse_ok(
         "[outputs.b]\nsdf = \"ball\"\nbounds = { min = [-1, -2, -3], max = [1, 2, 3.5] }\n",
         &[],
     );
     assert_eq!(
-        bounds.sdf_outputs["b"].bounds,
+        bounds.program_outputs["b"].bounds,
         Some([[-1.0, -2.0, -3.0], [1.0, 2.0, 3.5]])
     );
 }
