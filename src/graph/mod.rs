@@ -209,13 +209,8 @@ impl Graph {
                 inputs.push(graph.density(&output.cell, density, cell_node));
             }
             let contour = graph.push(format!("contour:{name}"), stage, inputs);
-            let mesh = graph.islands(name, &output.islands, contour);
-            let write = graph.push(
-                format!("write:{name}"),
-                Stage::write(output, manifest.report),
-                vec![mesh],
-            );
-            graph.outputs.insert(name.clone(), write);
+            let write = WriteStage::new(output, manifest.report);
+            graph.finish_output(name, &output.islands, contour, write);
         }
         // An SDF output: `sdf` reading a `file:` node per mesh of its program, then `write`.
         for (name, output) in &manifest.program_outputs {
@@ -232,9 +227,7 @@ impl Graph {
                 // round a part filled by a program (a ball of gyroid) is not a pore.
                 pore_box: None,
             };
-            let mesh = graph.islands(name, &output.islands, solid);
-            let write = graph.push(format!("write:{name}"), Stage::Write(write), vec![mesh]);
-            graph.outputs.insert(name.clone(), write);
+            graph.finish_output(name, &output.islands, solid, write);
         }
         // A tiled output: `tile` reading its cells' `constrain` nodes (and the scaffold's
         // `file:` node), then `write`.
@@ -260,9 +253,7 @@ impl Graph {
                 report: manifest.report,
                 pore_box: None,
             };
-            let mesh = graph.islands(name, &output.islands, tiled);
-            let write = graph.push(format!("write:{name}"), Stage::Write(write), vec![mesh]);
-            graph.outputs.insert(name.clone(), write);
+            graph.finish_output(name, &output.islands, tiled, write);
         }
         graph.check_order()?;
         Ok(graph)
@@ -306,6 +297,20 @@ impl Graph {
     /// The node whose mesh output `name` writes: `mesh` itself, or an `islands` node reading
     /// it when the output removes pieces (only then, so outputs without the keys keep the
     /// graph, keys and cache entries they had).
+    /// An output's last nodes after the one making its mesh: `islands` when it removes loose
+    /// pieces, then `write`, which becomes the output's target.
+    fn finish_output(
+        &mut self,
+        name: &str,
+        filter: &IslandFilter,
+        mesh: NodeId,
+        write: WriteStage,
+    ) {
+        let mesh = self.islands(name, filter, mesh);
+        let write = self.push(format!("write:{name}"), Stage::Write(write), vec![mesh]);
+        self.outputs.insert(name.to_string(), write);
+    }
+
     fn islands(&mut self, name: &str, filter: &IslandFilter, mesh: NodeId) -> NodeId {
         if !filter.is_active() {
             return mesh;

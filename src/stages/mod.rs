@@ -79,10 +79,6 @@ impl Stage {
         Stage::Contour(contour::ContourStage::new(output, fitted))
     }
 
-    pub fn write(output: &Output, report: measure::ReportLevel) -> Stage {
-        Stage::Write(write::WriteStage::new(output, report))
-    }
-
     pub fn kind(&self) -> &'static str {
         match self {
             Stage::File(_) => "file",
