@@ -144,8 +144,112 @@ impl Checker<'_, '_, '_> {
         let header = value.span();
         let path = |k: &str| format!("cells.{name}.{k}");
 
-        // Every source given is checked, so that its errors show even when there are several.
-        let mut given: Vec<(&str, &Key<'_>, &Value<'_>)> = SOURCE_KEYS
+        let (given, source) = self.cell_source(name, &header, &fields, cells);
+        let combination = match given.as_slice() {
+            ["blend"] => Some("a blend"),
+            ["minkowski"] => Some("a Minkowski combination"),
+            _ => None,
+        };
+
+        let group = match (fields.get("symmetry"), combination) {
+            (Some((k, _)), Some(kind)) => {
+                self.error(
+                    k.span(),
+                    &format!("`{}` does not apply to {kind}", path("symmetry")),
+                    "it takes the group of the cells it combines",
+                    Some("remove `symmetry`"),
+                );
+                None
+            }
+            (Some((_, v)), None) => self.symmetry(name, v),
+            (None, _) => None,
+        };
+        // Without `symmetry` (and not misspelled), the keys of a fitted cell do not apply.
+        let symmetric = fields.contains_key("symmetry") || fields.misspelled("symmetry");
+        let unfitted = !symmetric && source.is_some();
+        self.misplaced_fit_keys(name, &fields, combination, unfitted);
+        if let (Some(group), Some((_, sym)), Some((source, source_value))) =
+            (&group, fields.get("symmetry"), &source)
+        {
+            self.check_planar(name, group, sym, source, source_value);
+        }
+
+        // Values of keys reported above as not applying are not checked as well.
+        let applies = |k: &str| {
+            let sampling = SAMPLING_KEYS.contains(&k);
+            if combination.is_some() {
+                !sampling
+            } else {
+                symmetric
+            }
+        };
+        let value_of = |k: &str| fields.get(k).filter(|_| applies(k)).map(|(_, v)| *v);
+        let fit = value_of("fit").and_then(|v| self.fit(name, v));
+        let mirror = match value_of("extend") {
+            None => Some(true),
+            Some(v) => self.extend(&path("extend"), v),
+        };
+        let mut flag = |k: &str| match value_of(k) {
+            None => Some(false),
+            Some(v) => self.boolean(&path(k), v),
+        };
+        let (symmetrize, normal_to_faces, invert) =
+            (flag("symmetrize"), flag("normal_to_faces"), flag("invert"));
+        let offset = match value_of("offset") {
+            None => Some(0.0),
+            Some(v) => self.finite_number(&path("offset"), v),
+        };
+        let is_mesh = matches!(source, Some((CellSource::Mesh(_), _))) || given.contains(&"mesh");
+        let mesh_options = self.mesh_options(name, &fields, is_mesh);
+        let is_crystal =
+            matches!(source, Some((CellSource::Crystal(_), _))) || given.contains(&"crystal");
+        let crystal_options = self.crystal_options(name, &fields, is_crystal);
+
+        if self.report.len() > before {
+            return None;
+        }
+        let (mut source, _) = source?;
+        if let (CellSource::Mesh(mesh), Some((fit_placement, sampling))) =
+            (&mut source, mesh_options)
+        {
+            mesh.fit_placement = fit_placement;
+            mesh.sampling = sampling;
+        }
+        if let (CellSource::Crystal(crystal), Some(options)) = (&mut source, crystal_options) {
+            options.apply(crystal);
+        }
+        let (references, combination) = match &source {
+            CellSource::Blend { .. } | CellSource::Minkowski { .. } => {
+                let (refs, span) = references_of(&fields);
+                (refs, Some((span, combination.unwrap_or("a blend"))))
+            }
+            _ => (Vec::new(), None),
+        };
+        Some(Draft {
+            name: self.name(key),
+            source,
+            references,
+            combination,
+            group,
+            fit,
+            mirror: mirror?,
+            symmetrize: symmetrize?,
+            normal_to_faces: normal_to_faces?,
+            offset: offset?,
+            invert: invert?,
+        })
+    }
+
+    /// The cell's one source key, checked. Every source given is checked, so that its errors
+    /// show even when there are several; the kinds given come back in file order.
+    fn cell_source<'t, 'i>(
+        &mut self,
+        name: &str,
+        header: &Range<usize>,
+        fields: &Fields<'t, 'i>,
+        cells: &BTreeSet<&str>,
+    ) -> (Vec<&'static str>, Option<(CellSource, &'t Value<'i>)>) {
+        let mut given: Vec<(&'static str, &Key<'_>, &'t Value<'i>)> = SOURCE_KEYS
             .iter()
             .filter_map(|k| fields.get(k).map(|(key, v)| (*k, *key, *v)))
             .collect();
@@ -190,27 +294,19 @@ impl Checker<'_, '_, '_> {
                 None
             }
         };
-        let combination = match given.as_slice() {
-            [("blend", ..)] => Some("a blend"),
-            [("minkowski", ..)] => Some("a Minkowski combination"),
-            _ => None,
-        };
+        (given.iter().map(|(k, ..)| *k).collect(), source)
+    }
 
-        let group = match (fields.get("symmetry"), combination) {
-            (Some((k, _)), Some(kind)) => {
-                self.error(
-                    k.span(),
-                    &format!("`{}` does not apply to {kind}", path("symmetry")),
-                    "it takes the group of the cells it combines",
-                    Some("remove `symmetry`"),
-                );
-                None
-            }
-            (Some((_, v)), None) => self.symmetry(name, v),
-            (None, _) => None,
-        };
-        // Without `symmetry` (and not misspelled), the keys of a fitted cell do not apply.
-        let symmetric = fields.contains_key("symmetry") || fields.misspelled("symmetry");
+    /// A fitted cell's keys where they do not apply: sampling keys on a combination (nothing
+    /// is sampled), any of them on a cell without `symmetry` (`unfitted`).
+    fn misplaced_fit_keys(
+        &mut self,
+        name: &str,
+        fields: &Fields<'_, '_>,
+        combination: Option<&str>,
+        unfitted: bool,
+    ) {
+        let path = |k: &str| format!("cells.{name}.{k}");
         for k in SYMMETRIC_KEYS {
             let Some((key, _)) = fields.get(k) else {
                 continue;
@@ -224,7 +320,7 @@ impl Checker<'_, '_, '_> {
                         Some(&format!("set `{k}` on the cells it combines")),
                     );
                 }
-            } else if !symmetric && source.is_some() {
+            } else if unfitted {
                 self.error(
                     key.span(),
                     &format!("`{}` applies only to cells with a `symmetry`", path(k)),
@@ -235,77 +331,6 @@ impl Checker<'_, '_, '_> {
                 );
             }
         }
-        if let (Some(group), Some((_, sym)), Some((source, source_value))) =
-            (&group, fields.get("symmetry"), &source)
-        {
-            self.check_planar(name, group, sym, source, source_value);
-        }
-
-        // Values of keys reported above as not applying are not checked as well.
-        let applies = |k: &str| {
-            let sampling = SAMPLING_KEYS.contains(&k);
-            if combination.is_some() {
-                !sampling
-            } else {
-                symmetric
-            }
-        };
-        let value_of = |k: &str| fields.get(k).filter(|_| applies(k)).map(|(_, v)| *v);
-        let fit = value_of("fit").and_then(|v| self.fit(name, v));
-        let mirror = match value_of("extend") {
-            None => Some(true),
-            Some(v) => self.extend(&path("extend"), v),
-        };
-        let mut flag = |k: &str| match value_of(k) {
-            None => Some(false),
-            Some(v) => self.boolean(&path(k), v),
-        };
-        let (symmetrize, normal_to_faces, invert) =
-            (flag("symmetrize"), flag("normal_to_faces"), flag("invert"));
-        let offset = match value_of("offset") {
-            None => Some(0.0),
-            Some(v) => self.finite_number(&path("offset"), v),
-        };
-        let is_mesh = matches!(source, Some((CellSource::Mesh(_), _)))
-            || given.iter().any(|(k, ..)| *k == "mesh");
-        let mesh_options = self.mesh_options(name, &fields, is_mesh);
-        let is_crystal = matches!(source, Some((CellSource::Crystal(_), _)))
-            || given.iter().any(|(k, ..)| *k == "crystal");
-        let crystal_options = self.crystal_options(name, &fields, is_crystal);
-
-        if self.report.len() > before {
-            return None;
-        }
-        let (mut source, _) = source?;
-        if let (CellSource::Mesh(mesh), Some((fit_placement, sampling))) =
-            (&mut source, mesh_options)
-        {
-            mesh.fit_placement = fit_placement;
-            mesh.sampling = sampling;
-        }
-        if let (CellSource::Crystal(crystal), Some(options)) = (&mut source, crystal_options) {
-            options.apply(crystal);
-        }
-        let (references, combination) = match &source {
-            CellSource::Blend { .. } | CellSource::Minkowski { .. } => {
-                let (refs, span) = references_of(&fields);
-                (refs, Some((span, combination.unwrap_or("a blend"))))
-            }
-            _ => (Vec::new(), None),
-        };
-        Some(Draft {
-            name: self.name(key),
-            source,
-            references,
-            combination,
-            group,
-            fit,
-            mirror: mirror?,
-            symmetrize: symmetrize?,
-            normal_to_faces: normal_to_faces?,
-            offset: offset?,
-            invert: invert?,
-        })
     }
 
     /// One source key's value.
