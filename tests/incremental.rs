@@ -1,4 +1,4 @@
-//! The incremental behaviour users rely on (DESIGN.md §2), checked through the real binary.
+//! The incremental behaviour users rely on (docs/method.md §2), checked through the real binary.
 
 mod common;
 

@@ -1,4 +1,4 @@
-//! Tests of the face-normal constraint (METHOD.md §6) and the automatic choice of N. Every
+//! Tests of the face-normal constraint (docs/method.md §6) and the automatic choice of N. Every
 //! check uses values the test derives on its own: group elements written out, gradients by
 //! direct summation over all group elements, constraint rows built from scratch, zero sets
 //! found by bisection along rays.
@@ -48,7 +48,7 @@ fn signed_perms(d: usize, positive_only: bool) -> Vec<Matrix> {
     out
 }
 
-/// D3 in skew coordinates (METHOD.md §2).
+/// D3 in skew coordinates (docs/method.md §2).
 fn d3_elements() -> Vec<Matrix> {
     let m = |a: [[i32; 2]; 2]| [[a[0][0], a[0][1], 0], [a[1][0], a[1][1], 0], [0, 0, 1]];
     vec![
