@@ -4,7 +4,7 @@
 //! reader that closes the pipe early. Each gets a message or a quiet exit, never a hang,
 //! a panic or a file where none was asked for.
 
-mod common;
+use crate::common;
 
 use std::io::Read;
 use std::path::Path;

@@ -2,7 +2,7 @@
 //! (checked against the atoms by evaluating its terms here), located errors for a malformed
 //! CIF, and crystal and `ps` cells in a build (watertight, content-keyed).
 
-mod common;
+use crate::common;
 
 use std::f64::consts::TAU;
 

@@ -4,7 +4,7 @@
 //! whose manifests say why: the examples are meant to be printed. And none seals a cavity
 //! (trapped powder or resin) but those listed in `CAVITIES`, skins and crystal cages.
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeSet;
 use std::path::Path;

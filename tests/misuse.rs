@@ -1,7 +1,7 @@
 //! A build tool under misuse: results that are empty or broken fail the build (exit 1) with a
 //! message that says why, instead of writing empty files and exiting 0.
 
-mod common;
+use crate::common;
 
 use common::Project;
 

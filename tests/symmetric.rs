@@ -1,7 +1,7 @@
 //! Symmetric cells through the real binary: `latticebuild cell` against independent values,
 //! and the cache reusing fitted cells.
 
-mod common;
+use crate::common;
 
 use common::{Project, ran};
 

@@ -2,7 +2,7 @@
 //! independent values, what each edit reruns (docs/method.md §2: a format change only rewrites,
 //! the scaffold file is keyed by content), and the errors only the `tile` stage can find.
 
-mod common;
+use crate::common;
 
 use common::{Project, ran};
 
