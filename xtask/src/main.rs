@@ -82,17 +82,29 @@ fn release_binary() -> Result<PathBuf, String> {
     Ok(root().join("target/release/latticebuild"))
 }
 
+/// The tests that compare with files under `tests/golden/` (and bless them): the golden cases,
+/// the manifest diagnostics of `src/manifest/tests` (`tests/golden/err/*.txt`), and the
+/// integration tests that check a rendered diagnostic with `common::golden_err`.
+const GOLDEN_TESTS: &[&str] = &[
+    "golden::",
+    "render_exactly",
+    "command_line_edges::a_manifest_that_is_not_utf8",
+];
+
 /// Runs the golden tests; with `--bless`, rewrites their expected files first.
 fn golden(bless: bool) -> Result<(), String> {
     let mut cmd = Command::new(env!("CARGO"));
-    cmd.current_dir(root()).args([
-        "test",
-        "--package",
-        "latticebuild",
-        "--test",
-        "integration",
-        "golden::",
-    ]);
+    cmd.current_dir(root())
+        .args([
+            "test",
+            "--package",
+            "latticebuild",
+            "--lib",
+            "--test",
+            "integration",
+            "--",
+        ])
+        .args(GOLDEN_TESTS);
     if bless {
         cmd.env("LATTICEBUILD_BLESS", "1");
     }
