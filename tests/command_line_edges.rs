@@ -407,7 +407,10 @@ fn every_command_ends_quietly_when_its_reader_goes_away() {
     let manifest = "[cells.p]\ntpms = \"p\"\nsymmetry = \"Oh\"\nfit = { n = 8 }\n\n\
                     [outputs.ball]\nsdf = \"ball\"\nsamples = \"12^3\"\nformats = [\"stl\"]\n";
     let project = Project::new(manifest);
-    let nacl = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/crystals/NaCl.cif");
+    let nacl = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/crates/geom/tests/data/crystals/NaCl.cif"
+    );
     let commands: [&[&str]; 5] = [
         &["cell", "lattice.toml", "p", "--json"],
         &["cell", "lattice.toml", "p"],
