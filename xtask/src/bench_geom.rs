@@ -1,4 +1,4 @@
-//! `cargo xtask bench geom [expr|mesh-io|periodic|scaffold|symmetric|validate|constrain]…`:
+//! `cargo xtask bench geom [expr|mesh-io|periodic|scaffold|symmetric|validate|constrain|measure]…`:
 //! timings of the geometry crate's kernels, printed with their targets (what used to be the
 //! `#[ignore]`d `*_timing` tests of `crates/geom/tests`). No names: all of them.
 //!
@@ -12,7 +12,10 @@ use std::time::{Duration, Instant};
 
 use latticebuild_geom::mesh::Mesh;
 
-const ALL: &[(&str, fn() -> Result<(), String>)] = &[
+/// One benchmark: prints its numbers, fails on a wrong result or a gross regression.
+type Bench = fn() -> Result<(), String>;
+
+const ALL: &[(&str, Bench)] = &[
     ("expr", expr),
     ("mesh-io", mesh_io),
     ("periodic", periodic),
@@ -20,6 +23,7 @@ const ALL: &[(&str, fn() -> Result<(), String>)] = &[
     ("symmetric", symmetric),
     ("validate", validate),
     ("constrain", constrain),
+    ("measure", measure),
 ];
 
 pub fn run(args: &[String]) -> Result<(), String> {
@@ -471,4 +475,74 @@ fn td_source(x: [f64; 3]) -> f64 {
     0.6 * (TAU * x[0]).sin() * (TAU * x[1]).sin() * (TAU * x[2]).sin()
         + (x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
         - 0.15
+}
+
+/// A field sampled point by point, for [`measure`].
+struct Sampled<F: Fn([f64; 3]) -> f64 + Sync> {
+    grid: latticebuild_geom::field::Grid,
+    f: F,
+}
+
+impl<F: Fn([f64; 3]) -> f64 + Sync> latticebuild_geom::field::PlaneSampler for Sampled<F> {
+    fn grid(&self) -> &latticebuild_geom::field::Grid {
+        &self.grid
+    }
+
+    fn sample_rows(&self, k: usize, rows: std::ops::Range<usize>, out: &mut [f64]) {
+        let nx = self.grid.counts[0];
+        let z = self.grid.coord(2, k);
+        for (j, row) in rows.zip(out.chunks_mut(nx)) {
+            let y = self.grid.coord(1, j);
+            for (i, v) in row.iter_mut().enumerate() {
+                *v = (self.f)([self.grid.coord(0, i), y, z]);
+            }
+        }
+    }
+}
+
+/// The cost of the measure against the cost of contouring, for a gyroid sheet of 2×2×2 cells
+/// at `LB_MEASURE_N`³ samples (default 100), measured on `LB_MEASURE_M`³ voxels (default: the
+/// samples' own spacing).
+fn measure() -> Result<(), String> {
+    use latticebuild_geom::field::{Band, Grid};
+    use latticebuild_geom::measure::{solid_genera, thickness};
+    use std::f64::consts::TAU;
+
+    let n: usize = std::env::var("LB_MEASURE_N")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(100);
+    let gyroid = |p: [f64; 3]| {
+        (TAU * p[0]).sin() * (TAU * p[1]).cos()
+            + (TAU * p[1]).sin() * (TAU * p[2]).cos()
+            + (TAU * p[2]).sin() * (TAU * p[0]).cos()
+    };
+    let grid = Grid::spanning([0.125; 3], [2.125; 3], [n; 3]);
+    let band = Band { lo: -0.3, hi: 0.3 };
+    let start = Instant::now();
+    let sampler = Sampled { grid, f: gyroid };
+    let mesh = latticebuild_geom::contour::contour_band(&sampler, band, &grid, &|_| {})
+        .map_err(|e| format!("contour: {e:?}"))?
+        .mesh;
+    let contoured = start.elapsed();
+    let start = Instant::now();
+    let m: usize = std::env::var("LB_MEASURE_M")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(n - 1);
+    let t = thickness(&mesh, Some([[0.125; 3], [2.125; 3]]), 2.0 / m.max(1) as f64);
+    let measured = start.elapsed();
+    let start = Instant::now();
+    let topology = solid_genera(&mesh);
+    let topo = start.elapsed();
+    println!(
+        "{n}³: {} triangles contoured in {contoured:?}; thickness in {measured:?} on {:?} \
+         voxels: wall {:?}, pore {:?}; genus {:?} in {topo:?}",
+        mesh.triangles.len(),
+        t.samples,
+        t.wall,
+        t.pore,
+        topology
+    );
+    Ok(())
 }

@@ -37,7 +37,7 @@ fn main() -> ExitCode {
         },
         _ => Err(
             "usage: cargo xtask golden [--bless] | bench [--sizes 200,400,800] [--no-peers] \
-                  [--field separable|dense] | bench geom [expr|mesh-io|periodic|scaffold|symmetric|validate|constrain]… | bench-mesh [triangles] [samples] | bench-tile \
+                  [--field separable|dense] | bench geom [expr|mesh-io|periodic|scaffold|symmetric|validate|constrain|measure]… | bench-mesh [triangles] [samples] | bench-tile \
                   [--resolution N] [--formats stl,ply] [--keep] | codegen [--check] | fuzz \
                   [--minutes M] [--seed N] [TARGET…] | fuzz --list | fuzz --replay"
                 .to_string(),
