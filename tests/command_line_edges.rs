@@ -4,7 +4,7 @@
 //! reader that closes the pipe early. Each gets a message or a quiet exit, never a hang,
 //! a panic or a file where none was asked for.
 
-mod common;
+use crate::common;
 
 use std::io::Read;
 use std::path::Path;
@@ -115,19 +115,7 @@ fn a_manifest_that_is_not_utf8_is_an_error_at_its_first_bad_byte() {
     .expect("write");
     let out = project.run(&["build", "lattice.toml"]);
     assert_eq!(out.status.code(), Some(2));
-    assert_eq!(
-        stderr(&out),
-        "error: `lattice.toml` is not UTF-8 text
- --> lattice.toml:2:23
-  |
-2 | tpms = \"gyroid\"  # caf\\xE9 \\xFF
-  |                       ^^^^ byte 0xE9 is not UTF-8
-  |
-  = help: a manifest is TOML, which is UTF-8; save the file as UTF-8
-
-error: could not load `lattice.toml` due to 1 previous error
-"
-    );
+    common::golden_err("not_utf8_manifest", &stderr(&out));
     // A multi-byte sequence cut short is named whole.
     std::fs::write(project.path().join("lattice.toml"), b"a = 1\n\xe2\x82").expect("write");
     let out = project.run(&["graph", "lattice.toml"]);
@@ -419,7 +407,10 @@ fn every_command_ends_quietly_when_its_reader_goes_away() {
     let manifest = "[cells.p]\ntpms = \"p\"\nsymmetry = \"Oh\"\nfit = { n = 8 }\n\n\
                     [outputs.ball]\nsdf = \"ball\"\nsamples = \"12^3\"\nformats = [\"stl\"]\n";
     let project = Project::new(manifest);
-    let nacl = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/crystals/NaCl.cif");
+    let nacl = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/crates/geom/tests/data/crystals/NaCl.cif"
+    );
     let commands: [&[&str]; 5] = [
         &["cell", "lattice.toml", "p", "--json"],
         &["cell", "lattice.toml", "p"],

@@ -2,15 +2,21 @@
 //! (checked against the atoms by evaluating its terms here), located errors for a malformed
 //! CIF, and crystal and `ps` cells in a build (watertight, content-keyed).
 
-mod common;
+use crate::common;
 
 use std::f64::consts::TAU;
 
 use common::Project;
 use latticebuild_geom::periodic::{ExpandOptions, positions_of, read_crystal};
 
-const FAU: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/crystals/FAU.cif");
-const NACL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/crystals/NaCl.cif");
+const FAU: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/crates/geom/tests/data/crystals/FAU.cif"
+);
+const NACL: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/crates/geom/tests/data/crystals/NaCl.cif"
+);
 
 /// ψ from the JSON terms, written out independently of the library's model.
 fn psi(terms: &[serde_json::Value], p: [f64; 3]) -> f64 {

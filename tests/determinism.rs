@@ -9,7 +9,7 @@
 //! in their last bits between the two, and with them the tiled `slab` (graded offset),
 //! `bracket` (transition by node data) and the 2D `strip` (graded offset).
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeMap;
 use std::path::Path;

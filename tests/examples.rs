@@ -4,7 +4,7 @@
 //! whose manifests say why: the examples are meant to be printed. And none seals a cavity
 //! (trapped powder or resin) but those listed in `CAVITIES`, skins and crystal cages.
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -61,113 +61,166 @@ const CAVITIES: &[(&str, &str, &str)] = &[
 /// Walls thinner than this many sample (or lattice) spacings get a warning.
 const THIN_WALL: f64 = 2.0;
 
+/// One test per bundled example, named after its manifest (`examples/NAME.toml`), and
+/// `EXAMPLES`, the list `every_example_is_tested` holds against the directory.
+macro_rules! examples {
+    ($($name:ident),* $(,)?) => {
+        const EXAMPLES: &[&str] = &[$(concat!(stringify!($name), ".toml")),*];
+        $(
+            #[test]
+            fn $name() {
+                check_example(concat!(stringify!($name), ".toml"));
+            }
+        )*
+    };
+}
+
+examples!(
+    cesogen,
+    crystals,
+    expression,
+    gyroid,
+    mesh_inputs,
+    symmetric_cells,
+    tiling,
+    tiling_2d,
+    tpms_gallery,
+);
+
+/// A new example cannot be forgotten: every `examples/*.toml` has its test above, and every
+/// exception names a listed example.
 #[test]
-fn every_example_builds_watertight_manifold_outputs() {
+fn every_example_is_tested() {
     let examples = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
-    let mut count = 0;
-    let mut excepted_seen = BTreeSet::new();
+    let mut found = BTreeSet::new();
     for entry in std::fs::read_dir(&examples).expect("examples") {
         let path = entry.expect("entry").path();
-        if path.extension().is_none_or(|e| e != "toml") {
-            continue;
+        if path.extension().is_some_and(|e| e == "toml") {
+            found.insert(
+                path.file_name()
+                    .expect("name")
+                    .to_string_lossy()
+                    .to_string(),
+            );
         }
-        let scratch = tempfile::tempdir().expect("tempdir");
-        let manifest = scratch.path().join(path.file_name().expect("name"));
-        std::fs::copy(&path, &manifest).expect("copy");
-        // The meshes, crystals and scaffolds examples read, at the same relative place.
-        for dir in ["meshes", "crystals", "scaffolds"] {
-            common::copy_dir(&examples.join(dir), &scratch.path().join(dir), &[]);
-        }
-        let out = Command::new(common::BIN)
-            .args(["build", "--report", "-", "-q"])
-            .arg(&manifest)
-            .output()
-            .expect("run");
+    }
+    let listed: BTreeSet<String> = EXAMPLES.iter().map(|s| s.to_string()).collect();
+    assert_eq!(
+        found, listed,
+        "examples/*.toml and the list of `examples!` in tests/examples.rs differ"
+    );
+    assert!(
+        found.len() >= 3,
+        "expected the bundled examples, found {}",
+        found.len()
+    );
+    for (file, name, _) in MANY_PIECES.iter().chain(CAVITIES) {
         assert!(
-            out.status.success(),
-            "{}: {}",
-            path.display(),
-            String::from_utf8_lossy(&out.stderr)
+            listed.contains(*file),
+            "{file}: {name} is an exception but {file} is not a listed example"
         );
-        let reports: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
-        for r in reports.as_array().expect("array") {
-            // Planar regions of 2D cells are open by nature; every solid must be closed.
-            if r["planar"] != true {
-                assert_eq!(
-                    r["watertight"],
-                    true,
-                    "{}: {} is not watertight",
-                    path.display(),
-                    r["name"]
-                );
-            }
+    }
+}
+
+/// Builds `examples/FILE` in a scratch copy and checks every output.
+fn check_example(file: &str) {
+    let examples = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let mut excepted_seen = BTreeSet::new();
+    let path = examples.join(file);
+    let scratch = tempfile::tempdir().expect("tempdir");
+    let manifest = scratch.path().join(path.file_name().expect("name"));
+    std::fs::copy(&path, &manifest).expect("copy");
+    // The meshes, crystals and scaffolds examples read, at the same relative place.
+    for dir in ["meshes", "crystals", "scaffolds"] {
+        common::copy_dir(&examples.join(dir), &scratch.path().join(dir), &[]);
+    }
+    let out = Command::new(common::BIN)
+        .args(["build", "--report", "-", "-q"])
+        .arg(&manifest)
+        .output()
+        .expect("run");
+    assert!(
+        out.status.success(),
+        "{}: {}",
+        path.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let reports: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    for r in reports.as_array().expect("array") {
+        // Planar regions of 2D cells are open by nature; every solid must be closed.
+        if r["planar"] != true {
             assert_eq!(
-                r["manifold"],
+                r["watertight"],
                 true,
-                "{}: {} is not manifold",
+                "{}: {} is not watertight",
                 path.display(),
                 r["name"]
             );
-            assert!(r["triangles"].as_u64().expect("count") > 0);
-            let file = path
-                .file_name()
-                .expect("name")
-                .to_string_lossy()
-                .to_string();
-            let name = r["name"].as_str().expect("name");
-            let pieces = r["components"].as_u64().expect("components");
-            match MANY_PIECES
-                .iter()
-                .find(|(m, o, _)| *m == file && *o == name)
-            {
-                // Kept honest: an exception that has become one piece leaves the list.
-                Some((_, _, why)) => {
-                    assert!(
-                        pieces > 1,
-                        "{file}: {name} is one piece now, listed as not: {why}"
-                    );
-                    excepted_seen.insert((file.clone(), name.to_string()));
-                }
-                None => assert_eq!(
-                    pieces, 1,
-                    "{file}: {name} is {pieces} pieces (the largest {}): a printed example must \
-                     be one, or be listed in MANY_PIECES with the reason its manifest gives",
-                    r["largest_component_fraction"]
-                ),
-            }
-            let cavities = r["cavities"].as_u64().expect("cavities");
-            let sealed = CAVITIES.iter().any(|(m, o, _)| *m == file && *o == name);
-            assert!(
-                sealed == (cavities > 0),
-                "{file}: {name} seals {cavities} cavities; a printed example must seal none, or \
-                 be listed in CAVITIES with the reason its manifest gives"
-            );
-            if let Some(wall) = r["thinnest_wall"].as_f64() {
-                assert!(
-                    wall >= THIN_WALL,
-                    "{file}: {name}'s thinnest wall is {wall} spacings, under {THIN_WALL}"
-                );
-            }
-            for w in r["warnings"].as_array().into_iter().flatten() {
-                let w = w.as_str().expect("warning text");
-                assert!(
-                    !w.contains("shell wall"),
-                    "{file}: {name} warns of a thin wall: {w}"
-                );
-            }
-            for f in r["files"].as_array().expect("files") {
-                assert!(
-                    Path::new(f.as_str().expect("path")).is_file(),
-                    "{f} missing"
-                );
-            }
         }
-        count += 1;
-    }
-    assert!(count >= 3, "expected the bundled examples, found {count}");
-    for (file, name, _) in MANY_PIECES {
+        assert_eq!(
+            r["manifold"],
+            true,
+            "{}: {} is not manifold",
+            path.display(),
+            r["name"]
+        );
+        assert!(r["triangles"].as_u64().expect("count") > 0);
+        let file = path
+            .file_name()
+            .expect("name")
+            .to_string_lossy()
+            .to_string();
+        let name = r["name"].as_str().expect("name");
+        let pieces = r["components"].as_u64().expect("components");
+        match MANY_PIECES
+            .iter()
+            .find(|(m, o, _)| *m == file && *o == name)
+        {
+            // Kept honest: an exception that has become one piece leaves the list.
+            Some((_, _, why)) => {
+                assert!(
+                    pieces > 1,
+                    "{file}: {name} is one piece now, listed as not: {why}"
+                );
+                excepted_seen.insert((file.clone(), name.to_string()));
+            }
+            None => assert_eq!(
+                pieces, 1,
+                "{file}: {name} is {pieces} pieces (the largest {}): a printed example must \
+                 be one, or be listed in MANY_PIECES with the reason its manifest gives",
+                r["largest_component_fraction"]
+            ),
+        }
+        let cavities = r["cavities"].as_u64().expect("cavities");
+        let sealed = CAVITIES.iter().any(|(m, o, _)| *m == file && *o == name);
         assert!(
-            excepted_seen.contains(&(file.to_string(), name.to_string())),
+            sealed == (cavities > 0),
+            "{file}: {name} seals {cavities} cavities; a printed example must seal none, or \
+             be listed in CAVITIES with the reason its manifest gives"
+        );
+        if let Some(wall) = r["thinnest_wall"].as_f64() {
+            assert!(
+                wall >= THIN_WALL,
+                "{file}: {name}'s thinnest wall is {wall} spacings, under {THIN_WALL}"
+            );
+        }
+        for w in r["warnings"].as_array().into_iter().flatten() {
+            let w = w.as_str().expect("warning text");
+            assert!(
+                !w.contains("shell wall"),
+                "{file}: {name} warns of a thin wall: {w}"
+            );
+        }
+        for f in r["files"].as_array().expect("files") {
+            assert!(
+                Path::new(f.as_str().expect("path")).is_file(),
+                "{f} missing"
+            );
+        }
+    }
+    for (m, name, _) in MANY_PIECES {
+        assert!(
+            *m != file || excepted_seen.contains(&(file.to_string(), name.to_string())),
             "{file}: {name} is listed in MANY_PIECES but was not built"
         );
     }

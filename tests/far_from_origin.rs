@@ -3,7 +3,7 @@
 //! positions as the mesh has vertices. Where 32-bit positions cannot keep samples apart at
 //! all, the build is refused with the reason.
 
-mod common;
+use crate::common;
 
 use common::Project;
 use std::collections::{HashMap, HashSet};

@@ -7,7 +7,7 @@
 //! An optional `args` file adds command-line arguments, one per line.
 //! `cargo xtask golden --bless` (or `LATTICEBUILD_BLESS=1`) rewrites the expectations.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -1,6 +1,6 @@
-//! The incremental behaviour users rely on (DESIGN.md §2), checked through the real binary.
+//! The incremental behaviour users rely on (docs/method.md §2), checked through the real binary.
 
-mod common;
+use crate::common;
 
 use common::{Project, ran};
 

@@ -4,7 +4,7 @@
 //! this file, and each surface's signed volume summed; the filtered output must be exactly
 //! the pieces that pass.
 
-mod common;
+use crate::common;
 
 use common::{Project, number, ran};
 

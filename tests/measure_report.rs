@@ -4,7 +4,7 @@
 //! measure: the self-complementary Schwarz P (its solid and its void are congruent), and
 //! what a basic build leaves out.
 
-mod common;
+use crate::common;
 
 use common::{Project, by_name};
 

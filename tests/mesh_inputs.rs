@@ -2,7 +2,7 @@
 //! lattice (`within`, `skin`), caching keyed on the file's content, and errors naming the file.
 //! Meshes are generated here as ASCII STL text (an independent writer).
 
-mod common;
+use crate::common;
 
 use common::{Project, ran, sphere_stl};
 use latticebuild_geom::mesh::Mesh;

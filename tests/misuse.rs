@@ -1,7 +1,7 @@
 //! A build tool under misuse: results that are empty or broken fail the build (exit 1) with a
 //! message that says why, instead of writing empty files and exiting 0.
 
-mod common;
+use crate::common;
 
 use common::Project;
 
@@ -35,7 +35,7 @@ fn a_field_that_never_crosses_zero_fails_and_says_its_range() {
 #[test]
 fn a_crystal_surface_with_no_inside_fails() {
     let p = Project::new(&format!(
-        "[cells.na]\ncrystal = \"{}/examples/crystals/NaCl.cif\"\nspecies = \"Na\"\n\n\
+        "[cells.na]\ncrystal = \"{}/crates/geom/tests/data/crystals/NaCl.cif\"\nspecies = \"Na\"\n\n\
          [outputs.na]\ncell = \"na\"\ndomain = {{ min = [0, 0, 0], max = [1, 1, 1] }}\n\
          solid = \"inside\"\nsamples = 17\n",
         env!("CARGO_MANIFEST_DIR")

@@ -4,7 +4,7 @@
 //! and spherical shells, the volume over the mid-surface's area for TPMS sheets, and the
 //! target fraction itself.
 
-mod common;
+use crate::common;
 
 use common::{Project, by_name, number};
 

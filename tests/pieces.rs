@@ -4,7 +4,7 @@
 //! `cos 2πx = cos 2πy = cos 2πz = −1`), `f ≤ 0` one connected network; a hollow sphere's
 //! inner surface is a cavity, not a piece.
 
-mod common;
+use crate::common;
 
 use common::{Project, by_name};
 

@@ -1,7 +1,7 @@
 //! `latticebuild sdf` end to end: Cesogen command lines with the program name replaced, the
 //! written files, `@file` includes, and the errors a user sees.
 
-mod common;
+use crate::common;
 
 use std::f64::consts::PI;
 use std::path::Path;

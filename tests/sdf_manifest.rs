@@ -1,7 +1,7 @@
 //! SDF outputs in manifests (`sdf = "…"`) through the real binary: the same mesh as
 //! `latticebuild sdf`, volumes against closed forms, and what each edit reruns.
 
-mod common;
+use crate::common;
 
 use std::f64::consts::PI;
 

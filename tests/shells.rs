@@ -6,7 +6,7 @@
 //! the two one-sided solids `f ≤ w/2` and `f ≤ −w/2`, built as ordinary `inside` outputs on a
 //! finer grid.
 
-mod common;
+use crate::common;
 
 use common::{Project, by_name, number, sphere_stl};
 

@@ -1,7 +1,7 @@
 //! Symmetric cells through the real binary: `latticebuild cell` against independent values,
 //! and the cache reusing fitted cells.
 
-mod common;
+use crate::common;
 
 use common::{Project, ran};
 
@@ -65,7 +65,7 @@ fn cell_reproduces_band_limited_inputs_with_values_and_gradients() {
     use std::f64::consts::TAU;
     let p = Project::new(MANIFEST);
     write_points(&p);
-    // A band-limited input is reproduced exactly (METHOD.md §4), so the values must be the
+    // A band-limited input is reproduced exactly (docs/method.md §4), so the values must be the
     // formula's own, computed here independently.
     let json = cell_json(&p, "p");
     assert_eq!(json["group"], "Oh");

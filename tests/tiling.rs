@@ -1,8 +1,8 @@
 //! Tiled outputs through the real binary: the summary's counts and volume fraction against
-//! independent values, what each edit reruns (DESIGN.md §2: a format change only rewrites,
+//! independent values, what each edit reruns (docs/method.md §2: a format change only rewrites,
 //! the scaffold file is keyed by content), and the errors only the `tile` stage can find.
 
-mod common;
+use crate::common;
 
 use common::{Project, ran};
 

@@ -3,7 +3,7 @@
 //! identical files, never a wrong one; every format written from the chunked entry matches
 //! the one written by a cold build.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

@@ -2,7 +2,7 @@
 //! `f ≤ 0` over whole periods has volume fraction exactly 1/2: an independent value to check
 //! sampling, contouring, capping and the volume computation against.
 
-mod common;
+use crate::common;
 
 use common::Project;
 

@@ -1,7 +1,7 @@
 //! `latticebuild watch`: builds, rebuilds after a save, survives a broken manifest, and exits
 //! cleanly on Ctrl-C (SIGINT).
 
-mod common;
+use crate::common;
 
 use std::io::Read;
 use std::process::{Command, Stdio};

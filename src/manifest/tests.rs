@@ -1,6 +1,6 @@
-//! Manifest tests: a table of invalid manifests with their exact rendered diagnostics, and
-//! valid manifests with the [`Manifest`] they must produce. One driver per table, so a change
-//! of API edits one function.
+//! Manifest tests: a table of invalid manifests whose exact rendered diagnostics are files of
+//! `tests/golden/err/` (one per case, named after it), and valid manifests with the
+//! [`Manifest`] they must produce. One driver per table, so a change of API edits one function.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -45,11 +45,59 @@ fn without_spans(mut manifest: Manifest) -> Manifest {
 
 // ---- invalid manifests ------------------------------------------------------------------------
 
+/// An invalid manifest (and `--set` arguments); its exact rendered diagnostics are the file
+/// [`golden_file`] names, which `cargo xtask golden --bless` rewrites.
 pub(super) struct ErrCase {
     name: &'static str,
     manifest: &'static str,
     sets: &'static [&'static str],
-    expected: &'static str,
+}
+
+/// `tests/golden/err/NAME.txt`, NAME the case's name in lower case with every run of other
+/// characters than letters and digits one underscore.
+fn golden_file(name: &str) -> PathBuf {
+    let mut stem = String::new();
+    for c in name.chars() {
+        if c.is_ascii_alphanumeric() {
+            stem.push(c.to_ascii_lowercase());
+        } else if !stem.is_empty() && !stem.ends_with('_') {
+            stem.push('_');
+        }
+    }
+    let stem = stem.trim_end_matches('_');
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/golden/err/{stem}.txt"))
+}
+
+/// Renders every case and compares it with its golden file; with `LATTICEBUILD_BLESS` set
+/// (`cargo xtask golden --bless`), writes the files instead.
+pub(super) fn check_err_cases(cases: &[ErrCase]) {
+    let bless = std::env::var_os("LATTICEBUILD_BLESS").is_some();
+    let mut failures = Vec::new();
+    for case in cases {
+        let actual = render_errors(case.manifest, case.sets);
+        let file = golden_file(case.name);
+        if bless {
+            std::fs::write(&file, &actual).expect("bless a golden file");
+            continue;
+        }
+        let expected = std::fs::read_to_string(&file)
+            .unwrap_or_else(|e| format!("(cannot read {}: {e})\n", file.display()));
+        if actual != expected {
+            failures.push(format!(
+                "--- case `{}` ({})\n--- expected:\n{}--- actual:\n{}",
+                case.name,
+                file.display(),
+                expected,
+                actual
+            ));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} case(s) differ:\n{}\n(run `cargo xtask golden --bless` if the change is intended)",
+        failures.len(),
+        failures.join("\n")
+    );
 }
 
 /// A small valid manifest that the `--set` cases start from (output `g` starts on line 4).
@@ -68,67 +116,21 @@ const ERR_CASES: &[ErrCase] = &[
         name: "malformed toml",
         manifest: "[outputs.g]\nsamples = [64,\n",
         sets: &[],
-        expected: "\
-error: invalid TOML
- --> lattice.toml:2:15
-  |
-2 | samples = [64,
-  |               ^ unclosed array, expected `]`
-
-error: could not load `lattice.toml` due to 1 previous error
-",
     },
     ErrCase {
         name: "several toml syntax errors at once",
         manifest: "a = 1\nb = \n[x\n",
         sets: &[],
-        expected: "\
-error: invalid TOML
- --> lattice.toml:2:5
-  |
-2 | b =
-  |     ^ string values must be quoted, expected literal string
-
-error: invalid TOML
- --> lattice.toml:3:3
-  |
-3 | [x
-  |   ^ unclosed table, expected `]`
-
-error: could not load `lattice.toml` due to 2 previous errors
-",
     },
     ErrCase {
         name: "unknown top-level table",
         manifest: "[cells.a]\ntpms = \"gyroid\"\n\n[ouputs.g]\ncell = \"a\"\n",
         sets: &[],
-        expected: "\
-error: unknown top-level key `ouputs`
- --> lattice.toml:4:2
-  |
-4 | [ouputs.g]
-  |  ^^^^^^ unknown key
-  |
-  = help: did you mean `outputs`?
-
-error: could not load `lattice.toml` due to 1 previous error
-",
     },
     ErrCase {
         name: "unknown top-level key without a close name",
         manifest: "version = 1\n",
         sets: &[],
-        expected: "\
-error: unknown top-level key `version`
- --> lattice.toml:1:1
-  |
-1 | version = 1
-  | ^^^^^^^ unknown key
-  |
-  = help: expected one of `build`, `cells`, `scaffolds`, `outputs`
-
-error: could not load `lattice.toml` due to 1 previous error
-",
     },
     ErrCase {
         // The misspelling is the only error: `samples` is not also reported missing.
@@ -148,73 +150,21 @@ formats = [\"stl\", \"ply\"]
 sampels = 64
 ",
         sets: &[],
-        expected: "\
-error: unknown key `sampels` in output `g`
-  --> lattice.toml:12:1
-   |
-12 | sampels = 64
-   | ^^^^^^^ unknown key
-   |
-   = help: did you mean `samples`?
-
-error: could not load `lattice.toml` due to 1 previous error
-",
     },
     ErrCase {
         name: "misspelled tpms name",
         manifest: "[cells.a]\ntpms = \"gyroyd\"\n",
         sets: &[],
-        expected: "\
-error: unknown TPMS surface `gyroyd` in `cells.a.tpms`
- --> lattice.toml:2:8
-  |
-2 | tpms = \"gyroyd\"
-  |        ^^^^^^^^ not in the TPMS library
-  |
-  = help: did you mean `gyroid`?
-
-error: could not load `lattice.toml` due to 1 previous error
-",
     },
     ErrCase {
         name: "unknown tpms name without a close one",
         manifest: "[cells.a]\ntpms = \"banana\"\n",
         sets: &[],
-        expected: "\
-error: unknown TPMS surface `banana` in `cells.a.tpms`
- --> lattice.toml:2:8
-  |
-2 | tpms = \"banana\"
-  |        ^^^^^^^^ not in the TPMS library
-  |
-  = help: the surface names are listed under \"TPMS library\" in docs/manifest.md
-
-error: could not load `lattice.toml` due to 1 previous error
-",
     },
     ErrCase {
         name: "cell with neither and with both sources",
         manifest: "[cells.a]\n\n[cells.b]\ntpms = \"p\"\nexpr = \"x\"\n",
         sets: &[],
-        expected: "\
-error: cell `a` has no source
- --> lattice.toml:1:1
-  |
-1 | [cells.a]
-  | ^^^^^^^^^ expected `tpms`, `expr`, `mesh`, `crystal`, `ps`, `blend` or `minkowski`
-  |
-  = help: add `tpms = \"gyroid\"` for a library surface or `expr = \"...\"` for a formula in x, y, z
-
-error: cell `b` has both `tpms` and `expr`
- --> lattice.toml:3:1
-  |
-3 | [cells.b]
-  | ^^^^^^^^^ expected exactly one of them
-  |
-  = help: remove `tpms` or `expr`
-
-error: could not load `lattice.toml` due to 2 previous errors
-",
     },
     ErrCase {
         name: "missing referenced cell, with suggestion",
@@ -228,49 +178,11 @@ domain = { min = [0, 0, 0], max = [1, 1, 1] }
 samples = 32
 ",
         sets: &[],
-        expected: "\
-error: unknown cell `gyriod` in `outputs.g.cell`
- --> lattice.toml:5:8
-  |
-5 | cell = \"gyriod\"
-  |        ^^^^^^^^ no cell with this name
-  |
-  = help: did you mean `gyroid`?
-
-error: could not load `lattice.toml` due to 1 previous error
-",
     },
     ErrCase {
         name: "output missing every required key",
         manifest: "[outputs.g]\n",
         sets: &[],
-        expected: "\
-error: missing key `cell` in output `g`
- --> lattice.toml:1:1
-  |
-1 | [outputs.g]
-  | ^^^^^^^^^^^ missing `cell`
-  |
-  = help: add `cell = \"NAME\"` naming one of the `[cells.NAME]` tables, or `sdf = \"…\"` with an SDF program
-
-error: missing key `domain` in output `g`
- --> lattice.toml:1:1
-  |
-1 | [outputs.g]
-  | ^^^^^^^^^^^ missing `domain`
-  |
-  = help: add `domain = { min = [0, 0, 0], max = [1, 1, 1] }` (the box to fill, in model units)
-
-error: missing key `samples` or `voxel` in output `g`
- --> lattice.toml:1:1
-  |
-1 | [outputs.g]
-  | ^^^^^^^^^^^ missing `samples` or `voxel`
-  |
-  = help: add `samples = 64` (grid points per axis) or `voxel = 0.05` (grid spacing in model units)
-
-error: could not load `lattice.toml` due to 3 previous errors
-",
     },
     ErrCase {
         name: "wrong type",
@@ -284,15 +196,6 @@ domain = { min = [0, 0, 0], max = [1, 1, 1] }
 samples = \"big\"
 ",
         sets: &[],
-        expected: "\
-error: wrong type for `outputs.g.samples`
- --> lattice.toml:7:11
-  |
-7 | samples = \"big\"
-  |           ^^^^^ expected an integer or an array of 3 integers, found a string
-
-error: could not load `lattice.toml` due to 1 previous error
-",
     },
     ErrCase {
         name: "float where an integer is expected",
@@ -306,15 +209,6 @@ domain = { min = [0, 0, 0], max = [1, 1, 1] }
 samples = 64.5
 ",
         sets: &[],
-        expected: "\
-error: wrong type for `outputs.g.samples`
- --> lattice.toml:7:11
-  |
-7 | samples = 64.5
-  |           ^^^^ expected an integer or an array of 3 integers, found a float
-
-error: could not load `lattice.toml` due to 1 previous error
-",
     },
     ErrCase {
         name: "samples out of range",
@@ -328,15 +222,6 @@ domain = { min = [0, 0, 0], max = [1, 1, 1] }
 samples = 1
 ",
         sets: &[],
-        expected: "\
-error: `outputs.g.samples` must be at least 2 per axis
- --> lattice.toml:7:11
-  |
-7 | samples = 1
-  |           ^ found `1`
-
-error: could not load `lattice.toml` due to 1 previous error
-",
     },
     ErrCase {
         name: "one axis of samples out of range",
@@ -350,15 +235,6 @@ domain = { min = [0, 0, 0], max = [1, 1, 1] }
 samples = [32, 200000, 32]
 ",
         sets: &[],
-        expected: "\
-error: `outputs.g.samples` must be at most 100000 per axis
- --> lattice.toml:7:16
-  |
-7 | samples = [32, 200000, 32]
-  |                ^^^^^^ found `200000`
-
-error: could not load `lattice.toml` due to 1 previous error
-",
     },
     ErrCase {
         name: "negative thickness",
@@ -374,15 +250,6 @@ solid = \"shell\"
 thickness = -1
 ",
         sets: &[],
-        expected: "\
-error: `outputs.g.thickness` must be greater than 0
- --> lattice.toml:9:13
-  |
-9 | thickness = -1
-  |             ^^ found `-1`
-
-error: could not load `lattice.toml` due to 1 previous error
-",
     },
     ErrCase {
         name: "domain min not below max",
@@ -396,21 +263,6 @@ domain = { min = [0, 0, 0], max = [1, 0, -1] }
 samples = 32
 ",
         sets: &[],
-        expected: "\
-error: `outputs.g.domain.max` must be greater than `min` on every axis
- --> lattice.toml:6:39
-  |
-6 | domain = { min = [0, 0, 0], max = [1, 0, -1] }
-  |                                       ^ not greater than min y `0`
-
-error: `outputs.g.domain.max` must be greater than `min` on every axis
- --> lattice.toml:6:42
-  |
-6 | domain = { min = [0, 0, 0], max = [1, 0, -1] }
-  |                                          ^^ not greater than min z `0`
-
-error: could not load `lattice.toml` due to 2 previous errors
-",
     },
     ErrCase {
         name: "both samples and voxel",
@@ -425,17 +277,6 @@ samples = 32
 voxel = 0.1
 ",
         sets: &[],
-        expected: "\
-error: both `samples` and `voxel` given in output `g`
- --> lattice.toml:8:9
-  |
-8 | voxel = 0.1
-  |         ^^^ `samples` is already given
-  |
-  = help: give either `samples` (grid points per axis) or `voxel` (grid spacing)
-
-error: could not load `lattice.toml` due to 1 previous error
-",
     },
     ErrCase {
         name: "voxel too small for the domain",
@@ -449,17 +290,6 @@ domain = { min = [0, 0, 0], max = [1, 1, 1] }
 voxel = 1e-6
 ",
         sets: &[],
-        expected: "\
-error: `outputs.g.voxel` is too small for the domain
- --> lattice.toml:7:9
-  |
-7 | voxel = 1e-6
-  |         ^^^^ gives more than 100000 samples along x
-  |
-  = help: samples per axis are ceil(extent / voxel) + 1
-
-error: could not load `lattice.toml` due to 1 previous error
-",
     },
     ErrCase {
         name: "thickness with an inside solid",
@@ -474,17 +304,6 @@ samples = 32
 thickness = 0.2
 ",
         sets: &[],
-        expected: "\
-error: `outputs.g.thickness` applies only to shells
- --> lattice.toml:8:13
-  |
-8 | thickness = 0.2
-  |             ^^^ `solid` is `inside` (the default)
-  |
-  = help: remove `thickness`, or set `solid = \"shell\"` or `\"eccentric_shell\"`
-
-error: could not load `lattice.toml` due to 1 previous error
-",
     },
     ErrCase {
         name: "offset with a shell",
@@ -501,17 +320,6 @@ thickness = 0.2
 offset = 0.1
 ",
         sets: &[],
-        expected: "\
-error: `outputs.g.offset` does not apply to `solid = \"shell\"`
-  --> lattice.toml:10:10
-   |
-10 | offset = 0.1
-   |          ^^^ a shell is centred on the surface
-   |
-   = help: use `solid = \"eccentric_shell\"` for a shell around an offset level set
-
-error: could not load `lattice.toml` due to 1 previous error
-",
     },
     ErrCase {
         name: "shell without thickness",
@@ -526,17 +334,6 @@ samples = 32
 solid = \"shell\"
 ",
         sets: &[],
-        expected: "\
-error: missing key `thickness` in output `g`
- --> lattice.toml:4:1
-  |
-4 | [outputs.g]
-  | ^^^^^^^^^^^ `solid = \"shell\"` needs a `thickness`
-  |
-  = help: add `thickness = 0.2` (the shell's width in field values)
-
-error: could not load `lattice.toml` due to 1 previous error
-",
     },
     ErrCase {
         name: "unknown solid, formats, path and a non-finite offset",
@@ -554,39 +351,6 @@ formats = \"stl\"
 path = \"/tmp/x\"
 ",
         sets: &[],
-        expected: "\
-error: unknown solid `shel` in `outputs.g.solid`
- --> lattice.toml:8:9
-  |
-8 | solid = \"shel\"
-  |         ^^^^^^ not a kind of solid
-  |
-  = help: did you mean `shell`?
-
-error: `outputs.g.offset` must be a finite number
- --> lattice.toml:9:10
-  |
-9 | offset = nan
-  |          ^^^ found `nan`
-
-error: wrong type for `outputs.g.formats`
-  --> lattice.toml:10:11
-   |
-10 | formats = \"stl\"
-   |           ^^^^^ expected an array of format names, found a string
-   |
-   = help: write a list: `formats = [\"stl\"]`
-
-error: `outputs.g.path` must be relative to `out_dir`
-  --> lattice.toml:11:8
-   |
-11 | path = \"/tmp/x\"
-   |        ^^^^^^^^ absolute path
-   |
-   = help: give a path relative to `out_dir` without the extension, like `parts/gyroid`
-
-error: could not load `lattice.toml` due to 4 previous errors
-",
     },
     ErrCase {
         name: "array lengths, empty formats, bad cell sizes, bool type, name and path",
@@ -604,85 +368,11 @@ ascii = 1
 path = \"a/../../b\"
 ",
         sets: &[],
-        expected: "\
-error: invalid output name `my part`
- --> lattice.toml:4:10
-  |
-4 | [outputs.\"my part\"]
-  |          ^^^^^^^^^ names may contain only letters, digits, `_` and `-`
-
-error: `outputs.my part.samples` must have 3 values (x, y, z)
- --> lattice.toml:7:11
-  |
-7 | samples = [2, 3]
-  |           ^^^^^^ found 2
-
-error: `outputs.my part.formats` is empty
- --> lattice.toml:8:11
-  |
-8 | formats = []
-  |           ^^ expected at least one format
-  |
-  = help: omit `formats` to write STL, or list formats like `formats = [\"stl\"]`
-
-error: `outputs.my part.cell_size` must be greater than 0
- --> lattice.toml:9:17
-  |
-9 | cell_size = [1, 0, \"a\"]
-  |                 ^ found `0`
-
-error: wrong type for `outputs.my part.cell_size`
- --> lattice.toml:9:20
-  |
-9 | cell_size = [1, 0, \"a\"]
-  |                    ^^^ expected a number, found a string
-
-error: wrong type for `outputs.my part.ascii`
-  --> lattice.toml:10:9
-   |
-10 | ascii = 1
-   |         ^ expected `true` or `false`, found an integer
-
-error: `outputs.my part.path` must stay inside `out_dir`
-  --> lattice.toml:11:8
-   |
-11 | path = \"a/../../b\"
-   |        ^^^^^^^^^^^ `..` is not allowed
-   |
-   = help: give a path relative to `out_dir` without the extension, like `parts/gyroid`
-
-error: could not load `lattice.toml` due to 7 previous errors
-",
     },
     ErrCase {
         name: "wrong table types",
         manifest: "[[outputs]]\ncell = 1\n\n[build]\nout_dir = 3\nout = 1\n",
         sets: &[],
-        expected: "\
-error: wrong type for `outputs`
- --> lattice.toml:1:1
-  |
-1 | [[outputs]]
-  | ^^^^^^^^^^^ expected a table, found an array
-  |
-  = help: define outputs as `[outputs.NAME]` tables
-
-error: wrong type for `build.out_dir`
- --> lattice.toml:5:11
-  |
-5 | out_dir = 3
-  |           ^ expected a string, found an integer
-
-error: unknown key `out` in `[build]`
- --> lattice.toml:6:1
-  |
-6 | out = 1
-  | ^^^ unknown key
-  |
-  = help: expected one of `out_dir`, `units`, `report`
-
-error: could not load `lattice.toml` due to 3 previous errors
-",
     },
     ErrCase {
         // Two bad outputs, written out of alphabetical order: errors come in source order.
@@ -703,173 +393,52 @@ voxel = 0
 formats = [\"stl\", \"stp\"]
 ",
         sets: &[],
-        expected: "\
-error: unknown TPMS surface `gyroyd` in `cells.gyroid.tpms`
- --> lattice.toml:2:8
-  |
-2 | tpms = \"gyroyd\"
-  |        ^^^^^^^^ not in the TPMS library
-  |
-  = help: did you mean `gyroid`?
-
-error: `outputs.b.samples` must be at least 2 per axis
- --> lattice.toml:7:11
-  |
-7 | samples = 1
-  |           ^ found `1`
-
-error: unknown cell `schwarz` in `outputs.a.cell`
-  --> lattice.toml:10:8
-   |
-10 | cell = \"schwarz\"
-   |        ^^^^^^^^^ no cell with this name
-   |
-   = help: define the cell in a `[cells.schwarz]` table
-
-error: `outputs.a.voxel` must be greater than 0
-  --> lattice.toml:12:9
-   |
-12 | voxel = 0
-   |         ^ found `0`
-
-error: unknown format `stp` in `outputs.a.formats`
-  --> lattice.toml:13:19
-   |
-13 | formats = [\"stl\", \"stp\"]
-   |                   ^^^^^ not a supported format
-   |
-   = help: did you mean `stl`?
-
-error: could not load `lattice.toml` due to 5 previous errors
-",
     },
     ErrCase {
         name: "malformed --set",
         manifest: VALID,
         sets: &["outputs.g.offset", "=3", "outputs..x=1"],
-        expected: "\
-error: invalid `--set` argument `outputs.g.offset`
- --> --set:1:1
-  |
-1 | outputs.g.offset
-  | ^^^^^^^^^^^^^^^^ expected `dotted.key=value`
-  |
-  = help: for example `--set outputs.g.offset=0.12`
-
-error: invalid `--set` argument `=3`
- --> --set:1:1
-  |
-1 | =3
-  | ^ expected a key before `=`
-  |
-  = help: for example `--set outputs.g.offset=0.12`
-
-error: invalid key `outputs..x` in `--set`
- --> --set:1:1
-  |
-1 | outputs..x=1
-  | ^^^^^^^^^^ empty segment in dotted key
-  |
-  = help: write keys like `outputs.g.offset`
-
-error: could not load `lattice.toml` due to 3 previous errors
-",
     },
     ErrCase {
         name: "type errors in --set values",
         manifest: VALID,
         sets: &["outputs.g.samples=big", "cells.gyroid.tpms=gyroyd"],
-        expected: "\
-error: wrong type for `outputs.g.samples`
- --> --set:1:19
-  |
-1 | outputs.g.samples=big
-  |                   ^^^ expected an integer or an array of 3 integers, found a string
-
-error: unknown TPMS surface `gyroyd` in `cells.gyroid.tpms`
- --> --set:1:19
-  |
-1 | cells.gyroid.tpms=gyroyd
-  |                   ^^^^^^ not in the TPMS library
-  |
-  = help: did you mean `gyroid`?
-
-error: could not load `lattice.toml` due to 2 previous errors
-",
     },
     ErrCase {
         name: "--set values that are not TOML or not in a table",
         manifest: VALID,
         sets: &["outputs.g.formats=[\"ply\",", "outputs.g.cell.name=x"],
-        expected: "\
-error: invalid TOML value for `outputs.g.formats` in `--set`
- --> --set:1:26
-  |
-1 | outputs.g.formats=[\"ply\",
-  |                          ^ unclosed array, expected `]`
-
-error: cannot set `outputs.g.cell.name`
- --> --set:1:11
-  |
-1 | outputs.g.cell.name=x
-  |           ^^^^ `outputs.g.cell` is a string, not a table
-
-error: could not load `lattice.toml` due to 2 previous errors
-",
     },
     ErrCase {
         // The file's errors come first, then each `--set` argument's, in command-line order.
         name: "errors in the file and in --set together",
         manifest: "[cells.a]\ntpms = \"gyroyd\"\n",
         sets: &["cells.b.tpms=p", "cells.c.shape=1"],
-        expected: "\
-error: unknown TPMS surface `gyroyd` in `cells.a.tpms`
- --> lattice.toml:2:8
-  |
-2 | tpms = \"gyroyd\"
-  |        ^^^^^^^^ not in the TPMS library
-  |
-  = help: did you mean `gyroid`?
-
-error: cell `c` has no source
- --> --set:1:7
-  |
-1 | cells.c.shape=1
-  |       ^ expected `tpms`, `expr`, `mesh`, `crystal`, `ps`, `blend` or `minkowski`
-  |
-  = help: add `tpms = \"gyroid\"` for a library surface or `expr = \"...\"` for a formula in x, y, z
-
-error: unknown key `shape` in cell `c`
- --> --set:1:9
-  |
-1 | cells.c.shape=1
-  |         ^^^^^ unknown key
-  |
-  = help: expected one of `tpms`, `expr`, `blend`, `minkowski`, `mesh`, `placement`, `sample`, `crystal`, `species`, `reconstruct`, `ps`, `symmetry`, `fit`, `extend`, `symmetrize`, `normal_to_faces`, `offset`, `invert`
-
-error: could not load `lattice.toml` due to 3 previous errors
-",
     },
 ];
 
 #[test]
 fn invalid_manifests_render_exactly() {
-    let mut failures = Vec::new();
-    for case in ERR_CASES {
-        let actual = render_errors(case.manifest, case.sets);
-        if actual != case.expected {
-            failures.push(format!(
-                "--- case `{}`\n--- expected:\n{}--- actual:\n{}",
-                case.name, case.expected, actual
-            ));
-        }
+    check_err_cases(ERR_CASES);
+}
+
+/// Two cases cannot share a golden file.
+#[test]
+fn every_invalid_case_has_its_own_golden_file() {
+    let tables = [
+        ERR_CASES,
+        mesh_tests::MESH_ERR_CASES,
+        program_tests::SDF_ERR_CASES,
+        symmetry_tests::SYM_ERR_CASES,
+    ];
+    let mut files = std::collections::BTreeSet::new();
+    for case in tables.iter().copied().flatten() {
+        assert!(
+            files.insert(golden_file(case.name)),
+            "two cases named like `{}`",
+            case.name
+        );
     }
-    assert!(
-        failures.is_empty(),
-        "{} case(s) differ:\n{}",
-        failures.len(),
-        failures.join("\n")
-    );
 }
 
 #[test]

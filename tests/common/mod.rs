@@ -159,3 +159,21 @@ pub fn sphere_stl(radius: f64, centre: [f64; 3], rings: usize, segments: usize) 
     text.push_str("endsolid sphere\n");
     (text, volume)
 }
+
+/// Checks a rendered diagnostic against `tests/golden/err/NAME.txt`; with `LATTICEBUILD_BLESS`
+/// set (`cargo xtask golden --bless`), writes the file instead.
+pub fn golden_err(name: &str, actual: &str) {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/golden/err/{name}.txt"));
+    if std::env::var_os("LATTICEBUILD_BLESS").is_some() {
+        std::fs::write(&file, actual).expect("bless a golden file");
+        return;
+    }
+    let expected = std::fs::read_to_string(&file)
+        .unwrap_or_else(|e| panic!("cannot read {}: {e}", file.display()));
+    assert!(
+        expected == actual,
+        "the output differs from {}\n--- expected:\n{expected}--- actual:\n{actual}\
+         (run `cargo xtask golden --bless` if the change is intended)",
+        file.display()
+    );
+}

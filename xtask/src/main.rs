@@ -1,5 +1,6 @@
 //! Chores: `cargo xtask golden [--bless]`, `cargo xtask bench [--sizes 200,400,800]
-//! [--no-peers] [--field separable|dense]`, `cargo xtask bench-mesh [triangles] [samples]`,
+//! [--no-peers] [--field separable|dense]`, `cargo xtask bench geom [NAME…]` (see
+//! `bench_geom.rs`), `cargo xtask bench-mesh [triangles] [samples]`,
 //! `cargo xtask bench-tile [--resolution N] [--formats stl,ply] [--keep]`,
 //! `cargo xtask codegen [--check]`, `cargo xtask fuzz [--minutes M] [TARGET…]` (see
 //! `fuzz/mod.rs`; `--list`, `--replay`).
@@ -7,6 +8,7 @@
 //! Invariant: every generated file has a test that fails when it is stale
 //! (`tests/codegen.rs`), so generated text cannot drift from its source.
 
+mod bench_geom;
 mod bench_mesh;
 mod bench_tile;
 mod fuzz;
@@ -22,6 +24,7 @@ fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let result = match args.first().map(String::as_str) {
         Some("golden") => golden(args.iter().any(|a| a == "--bless")),
+        Some("bench") if args.get(1).is_some_and(|a| a == "geom") => bench_geom::run(&args[2..]),
         Some("bench") => bench(&args[1..]),
         Some("bench-mesh") => bench_mesh::run(&args[1..]),
         Some("bench-tile") => bench_tile::run(&args[1..]),
@@ -34,7 +37,7 @@ fn main() -> ExitCode {
         },
         _ => Err(
             "usage: cargo xtask golden [--bless] | bench [--sizes 200,400,800] [--no-peers] \
-                  [--field separable|dense] | bench-mesh [triangles] [samples] | bench-tile \
+                  [--field separable|dense] | bench geom [expr|mesh-io|periodic|scaffold|symmetric|validate|constrain|measure]… | bench-mesh [triangles] [samples] | bench-tile \
                   [--resolution N] [--formats stl,ply] [--keep] | codegen [--check] | fuzz \
                   [--minutes M] [--seed N] [TARGET…] | fuzz --list | fuzz --replay"
                 .to_string(),
@@ -87,10 +90,29 @@ fn release_binary() -> Result<PathBuf, String> {
     Ok(target.join("release/latticebuild"))
 }
 
+/// The tests that compare with files under `tests/golden/` (and bless them): the golden cases,
+/// the manifest diagnostics of `src/manifest/tests` (`tests/golden/err/*.txt`), and the
+/// integration tests that check a rendered diagnostic with `common::golden_err`.
+const GOLDEN_TESTS: &[&str] = &[
+    "golden::",
+    "render_exactly",
+    "command_line_edges::a_manifest_that_is_not_utf8",
+];
+
 /// Runs the golden tests; with `--bless`, rewrites their expected files first.
 fn golden(bless: bool) -> Result<(), String> {
     let mut cmd = Command::new(env!("CARGO"));
-    cmd.current_dir(root()).args(["test", "--test", "golden"]);
+    cmd.current_dir(root())
+        .args([
+            "test",
+            "--package",
+            "latticebuild",
+            "--lib",
+            "--test",
+            "integration",
+            "--",
+        ])
+        .args(GOLDEN_TESTS);
     if bless {
         cmd.env("LATTICEBUILD_BLESS", "1");
     }

@@ -1,7 +1,7 @@
 //! Round trips of every writer through independent readers (stl_io, ply-rs-bw, tobj, and small
 //! parsers written here from the format descriptions for OFF and legacy VTK).
 
-mod common;
+use crate::common;
 
 use common::torus;
 use latticebuild_geom::mesh::Mesh;

@@ -1,7 +1,7 @@
 //! Malformed input: each error says what and where; truncated files are errors; no prefix or
 //! corruption of a valid file makes a reader panic.
 
-mod common;
+use crate::common;
 
 use common::mesh_gen::Rng;
 use common::torus;

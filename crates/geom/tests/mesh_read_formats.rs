@@ -1,7 +1,7 @@
 //! Readers on hand-written files with known contents, round trips through the crate's own
 //! writers, and tobj as an independent OBJ reader.
 
-mod common;
+use crate::common;
 
 use common::torus;
 use latticebuild_geom::mesh::Mesh;

@@ -1,7 +1,7 @@
 //! Signed distances of generated meshes against analytic solids; samplers against point
 //! queries; the band; contouring the field of a mesh.
 
-mod common;
+use crate::common;
 
 use common::mesh_gen::{Rng, box_sd, chord_error, icosphere, norm, sliver_cube};
 use latticebuild_geom::contour::contour;

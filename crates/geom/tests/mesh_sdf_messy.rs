@@ -2,7 +2,7 @@
 //! faces, flipped faces, slivers, soups read from STL, cavities. What "correct" means for each
 //! is decided in the `mesh_sdf` module docs; these tests hold it.
 
-mod common;
+use crate::common;
 
 use common::mesh_gen::{Rng, box_sd, flip_some, icosphere, norm, sliver_cube};
 use latticebuild_geom::mesh::Mesh;

@@ -1,7 +1,7 @@
 //! Winding numbers of generated meshes against their analytic solids, and the hierarchical
 //! evaluation against the exact sum over every triangle.
 
-mod common;
+use crate::common;
 
 use common::mesh_gen::{Rng, chord_error, icosphere, longest_edge, norm, torus, torus_sd};
 use latticebuild_geom::field::{Grid, ScalarField};

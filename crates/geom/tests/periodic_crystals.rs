@@ -316,6 +316,21 @@ fn too_few_scales_report_the_error_and_stop_unconverged() {
     assert_eq!(r.steps.len(), 1);
 }
 
+/// At tolerance 0 the search cannot stop early: it goes through scales 1, 2 and 4 (the
+/// property the Faujasite timing of `cargo xtask bench geom periodic` relies on).
+#[test]
+fn zero_tolerance_searches_every_scale_up_to_the_largest() {
+    let c = crystal("FAU.cif");
+    let points = positions_of(&c.atoms(&ExpandOptions::default()), Some("Si"));
+    let options = ReconstructOptions {
+        tolerance: 0.0,
+        max_scale: 4,
+        ..ReconstructOptions::default()
+    };
+    let r = reconstruct(&points, &options).unwrap();
+    assert_eq!(r.steps.len(), 3);
+}
+
 #[test]
 fn optimisation_keeps_the_error_and_does_not_lower_porosity() {
     let c = crystal("FAU.cif");

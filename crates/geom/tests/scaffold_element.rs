@@ -1,5 +1,5 @@
 //! The reference elements and shape functions of every scaffold kind: partition of unity,
-//! N_i(node_j) = δ_ij, gradients against finite differences, METHOD.md's reference domains,
+//! N_i(node_j) = δ_ij, gradients against finite differences, docs/method.md's reference domains,
 //! outward faces, and exact quadrature.
 
 #![allow(clippy::needless_range_loop)] // index loops mirror the formulas (ξ_a, node i)

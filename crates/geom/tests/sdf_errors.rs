@@ -1,7 +1,7 @@
 //! Every kind of bad program gives an error naming the word at fault, with the exact text a
 //! user reads; and the canonical form reads back to itself.
 
-mod common;
+use crate::common;
 
 use common::sdf_sphere::SphereFile;
 use std::collections::HashMap;

@@ -3,7 +3,7 @@
 //! centres inside the solid by point evaluation (no contouring), or complementary solids that
 //! must add up to the box.
 
-mod common;
+use crate::common;
 
 use common::sdf_sphere::SphereFile;
 use std::f64::consts::PI;

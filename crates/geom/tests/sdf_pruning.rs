@@ -1,7 +1,7 @@
 //! Skipping tiles by interval bounds is invisible in the output: meshes with and without it
 //! are identical, and samples are pure functions of their grid indices.
 
-mod common;
+use crate::common;
 
 use common::sdf_sphere::SphereFile;
 

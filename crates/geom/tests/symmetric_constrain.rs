@@ -1,9 +1,9 @@
-//! Tests of the face-normal constraint (METHOD.md §6) and the automatic choice of N. Every
+//! Tests of the face-normal constraint (docs/method.md §6) and the automatic choice of N. Every
 //! check uses values the test derives on its own: group elements written out, gradients by
 //! direct summation over all group elements, constraint rows built from scratch, zero sets
 //! found by bisection along rays.
 //!
-//! `cargo test -p latticebuild-geom --test symmetric_constrain`
+//! `cargo test -p latticebuild-geom --test integration symmetric_constrain`
 
 use latticebuild_geom::symmetric::{
     Complex64, Extend, FitError, FitOptions, FittedCell, Group, Matrix, SampleOptions, fit,
@@ -12,7 +12,6 @@ use latticebuild_geom::symmetric::{
 use nalgebra::DMatrix;
 use std::collections::HashMap;
 use std::f64::consts::TAU;
-use std::time::Instant;
 
 // ---------- independent helpers ----------
 
@@ -48,7 +47,7 @@ fn signed_perms(d: usize, positive_only: bool) -> Vec<Matrix> {
     out
 }
 
-/// D3 in skew coordinates (METHOD.md §2).
+/// D3 in skew coordinates (docs/method.md §2).
 fn d3_elements() -> Vec<Matrix> {
     let m = |a: [[i32; 2]; 2]| [[a[0][0], a[0][1], 0], [a[1][0], a[1][1], 0], [0, 0, 1]];
     vec![
@@ -586,25 +585,6 @@ fn fit_auto_reports_an_unreachable_tolerance() {
         fit_auto(&g, &src, &FitOptions::default(), f64::NAN, 256),
         Err(FitError::AutoOptions { .. })
     ));
-}
-
-// ---------- timing ----------
-
-#[test]
-#[ignore]
-fn constraint_timing() {
-    for n in [32usize, 64, 128] {
-        let cell = td_cell(n);
-        let t = Instant::now();
-        let (_, r) = cell.constrain_normal_to_faces().unwrap();
-        println!(
-            "Td N = {n}: constrain {:.3} s, |Δc| = {:.3e}, residual {:.2e} → {:.2e}",
-            t.elapsed().as_secs_f64(),
-            r.delta_norm,
-            r.max_face_residual_before,
-            r.max_face_residual
-        );
-    }
 }
 
 /// The face residual sums its lines in a fixed order, not a hash map's (random per map): the

@@ -1,4 +1,4 @@
-//! Tests of the symmetric Fourier cells (METHOD.md). Every check compares against a value the
+//! Tests of the symmetric Fourier cells (docs/method.md). Every check compares against a value the
 //! test derives on its own (matrices written out, brute-force orbits, quadrature, known
 //! inputs), never against the code's own output.
 //!
@@ -238,7 +238,7 @@ mod symmetric {
     fn symmetric_group_maps_reference_element_onto_itself() {
         for g in all_groups() {
             let r = g.reference_element().expect("named groups have one");
-            // Vertices written out here, from METHOD.md §1.
+            // Vertices written out here, from docs/method.md §1.
             let h = R3 / 6.0;
             let verts: Vec<[f64; 3]> = match r {
                 ReferenceElement::Square => vec![

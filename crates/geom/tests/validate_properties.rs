@@ -1,7 +1,7 @@
 //! Properties of `validate::check` on meshes whose answers are known by construction or by
 //! hand, plus a brute-force reference implementation for randomly damaged meshes.
 
-mod common;
+use crate::common;
 
 use common::torus;
 use latticebuild_geom::mesh::Mesh;

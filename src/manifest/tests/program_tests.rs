@@ -4,97 +4,15 @@
 use super::*;
 use crate::manifest::{ProgramResolution, voxel_samples};
 
-const SDF_ERR_CASES: &[ErrCase] = &[ErrCase {
+pub(super) const SDF_ERR_CASES: &[ErrCase] = &[ErrCase {
     name: "program errors at their words, cell keys beside `sdf`, samples, bounds, quotes, escapes",
     manifest: "[outputs.a]\nsdf = \"ball intersection\"\nsamples = \"1\"\n\n[outputs.b]\nsdf = \"ball scal 2 @more.txt\"\ncell = \"g\"\nsolid = \"shell\"\n\n[outputs.c]\nsdf = 'expression \"x + * y\"'\nbounds = { min = [0, 0], max = [1, -1, 1] }\n\n[outputs.d]\nsdf = \"tpms.gyroid scale 1/0 \\\"oops\"\nvoxel = 0.1\nsamples = 3\n\n[outputs.e]\nsdf = \"ball \\u0062all union extra\"\n",
     sets: &["outputs.f.sdf=tpms.p file part.step intersection"],
-    expected: "\
-error: invalid SDF program in `outputs.a.sdf`
- --> lattice.toml:2:13
-  |
-2 | sdf = \"ball intersection\"
-  |             ^^^^^^^^^^^^ word 2 `intersection`: intersection needs two solids, found one
-
-error: invalid `outputs.a.samples`
- --> lattice.toml:3:11
-  |
-3 | samples = \"1\"
-  |           ^^^ `1` gives fewer than 2 samples along an axis; a grid needs at least 2
-  |
-  = help: write a total like `\"130^3\"` (spread evenly over the axes) or counts per axis like `[100, 50, 50]`
-
-error: invalid SDF program in `outputs.b.sdf`
- --> lattice.toml:6:13
-  |
-6 | sdf = \"ball scal 2 @more.txt\"
-  |             ^^^^ word 2 `scal`: unknown word; did you mean `scale`?
-
-error: `outputs.b.cell` does not apply to an `sdf` output
- --> lattice.toml:7:1
-  |
-7 | cell = \"g\"
-  | ^^^^ the output's solid is its `sdf` program
-  |
-  = help: give either `cell` or `sdf`
-
-error: `outputs.b.solid` does not apply to an `sdf` output
- --> lattice.toml:8:1
-  |
-8 | solid = \"shell\"
-  | ^^^^^ the program is the solid
-  |
-  = help: use `complement`, `offset R` or `shell T` in the program
-
-error: invalid SDF program in `outputs.c.sdf`
-  --> lattice.toml:11:24
-   |
-11 | sdf = 'expression \"x + * y\"'
-   |                        ^ word 2 `x + * y`: bad expression at byte 4: unexpected `*`; expected a number, a variable, a function call or `(`
-
-error: `outputs.c.bounds.min` must have 3 values (x, y, z)
-  --> lattice.toml:12:18
-   |
-12 | bounds = { min = [0, 0], max = [1, -1, 1] }
-   |                  ^^^^^^ found 2
-
-error: invalid SDF program in `outputs.d.sdf`
-  --> lattice.toml:15:7
-   |
-15 | sdf = \"tpms.gyroid scale 1/0 \\\"oops\"
-   |       ^^^^^^^^^^^^^^^^^^^^^^^^^^^^^^ the program has an unclosed quote at byte 22
-
-error: both `samples` and `voxel` given in output `d`
-  --> lattice.toml:17:11
-   |
-17 | samples = 3
-   |           ^ `voxel` is already given
-   |
-   = help: give either `samples` (how many grid points) or `voxel` (grid spacing)
-
-error: invalid SDF program in `outputs.e.sdf`
-  --> lattice.toml:20:7
-   |
-20 | sdf = \"ball \\u0062all union extra\"
-   |       ^^^^^^^^^^^^^^^^^^^^^^^^^^^^ word 4 `extra`: unknown word; expected a solid (`ball`, `cylinder`, `box`, `tpms.NAME`, `expression`, `file`) or an operation (`complement`, `offset`, `shell`, `move`, `scale`, `rotate`, `orient`, `union`, `intersection`, `difference`)
-
-error: `file part.step` in `outputs.f.sdf` is not a mesh file the readers know
- --> --set:1:27
-  |
-1 | outputs.f.sdf=tpms.p file part.step intersection
-  |                           ^^^^^^^^^ `.step`; expected `stl`, `obj`, `ply`, `off`
-  |
-  = help: convert the mesh to STL, OBJ, PLY or OFF
-
-error: could not load `lattice.toml` due to 11 previous errors
-",
 }];
 
 #[test]
 fn invalid_sdf_manifests_render_exactly() {
-    for case in SDF_ERR_CASES {
-        let actual = render_errors(case.manifest, case.sets);
-        assert_eq!(actual, case.expected, "case `{}`", case.name);
-    }
+    check_err_cases(SDF_ERR_CASES);
 }
 
 #[test]

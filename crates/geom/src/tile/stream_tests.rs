@@ -19,10 +19,7 @@ impl ScalarField for SchwarzP {
 }
 
 fn example(name: &str) -> Scaffold {
-    let path = format!(
-        "{}/../../examples/scaffolds/{name}",
-        env!("CARGO_MANIFEST_DIR")
-    );
+    let path = format!("{}/tests/data/scaffolds/{name}", env!("CARGO_MANIFEST_DIR"));
     let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
     read_scaffold(&bytes, &path, None).unwrap_or_else(|e| panic!("{e}"))
 }
