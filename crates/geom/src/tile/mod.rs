@@ -486,8 +486,20 @@ fn stream_on(
 }
 
 /// Makes chunks `0..chunks` in order with `make`, handing each to `sink` while the next one
-/// is made (`rayon::join`); the first error stops both.
+/// is made (`rayon::join`); the first error stops both. The arrays the sink recycled
+/// ([`MeshChunk::recycle`]) are dropped at the end.
 fn pipeline(
+    chunks: usize,
+    make: impl FnMut(usize) -> Result<MeshChunk, TileError> + Send,
+    sink: &mut ChunkSink,
+) -> Result<(), TileError> {
+    let done = make_chunks(chunks, make, sink);
+    crate::mesh::drop_spare_arrays();
+    done
+}
+
+/// [`pipeline`]'s loop.
+fn make_chunks(
     chunks: usize,
     mut make: impl FnMut(usize) -> Result<MeshChunk, TileError> + Send,
     sink: &mut ChunkSink,

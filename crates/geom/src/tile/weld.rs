@@ -41,7 +41,7 @@ impl<S: ElementShape> Corners for Elements<'_, S> {
         self.map.map(e, xi)
     }
 }
-use crate::mesh::MeshChunk;
+use crate::mesh::{MeshChunk, spare_arrays};
 
 /// A local vertex on the element boundary: the weights of its lattice ends, and the faces
 /// whose caps alone use it (0 when surface triangles use it).
@@ -687,7 +687,7 @@ impl<'a> Welder<'a> {
         }
         borrowed.sort_unstable_by_key(|&(id, _)| id);
         let first = self.next_id;
-        let (mut vertices, mut triangles) = (Vec::new(), Vec::new());
+        let (mut vertices, mut triangles) = spare_arrays();
         self.place_vertices(&span, first, scratch, &mut vertices)?;
         span.triangles(locals, scratch, &mut triangles);
         let fresh = self
