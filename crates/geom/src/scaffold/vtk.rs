@@ -485,11 +485,12 @@ pub(super) fn read_xml(bytes: &[u8], name: &str) -> Result<Scaffold, ScaffoldErr
     raw.finish(loc)
 }
 
+/// A Piece tag's start, and its numbers of points and cells.
+type PieceCounts = (usize, usize, usize);
+
 /// Reads a `.vtu` file's tags: its encoding, its DataArrays (where their data is, not yet
-/// decoded) and its one Piece `(tag start, points, cells)`.
-fn scan_xml<'a>(
-    loc: Locator<'a>,
-) -> Result<(XmlFile<'a>, Vec<DataArray>, (usize, usize, usize)), ScaffoldError> {
+/// decoded) and its one Piece.
+fn scan_xml(loc: Locator<'_>) -> Result<(XmlFile<'_>, Vec<DataArray>, PieceCounts), ScaffoldError> {
     let bytes = loc.bytes;
     let mut file = XmlFile {
         loc,
@@ -500,7 +501,7 @@ fn scan_xml<'a>(
     };
     let mut arrays = Vec::new();
     let mut section = Section::Other;
-    let mut piece: Option<(usize, usize, usize)> = None;
+    let mut piece: Option<PieceCounts> = None;
     let mut saw_vtk = false;
     let mut pos = 0;
     while let Some(tag) = next_tag(bytes, pos) {
@@ -564,8 +565,8 @@ fn scan_xml<'a>(
     Ok((file, arrays, piece))
 }
 
-/// A Piece tag's `(start, NumberOfPoints, NumberOfCells)`.
-fn piece_counts(tag: &Tag<'_>, loc: Locator<'_>) -> Result<(usize, usize, usize), ScaffoldError> {
+/// A Piece tag's start, NumberOfPoints and NumberOfCells.
+fn piece_counts(tag: &Tag<'_>, loc: Locator<'_>) -> Result<PieceCounts, ScaffoldError> {
     let number = |key: &str| {
         tag.attribute(key)
             .and_then(|v| std::str::from_utf8(v).ok()?.trim().parse::<usize>().ok())
