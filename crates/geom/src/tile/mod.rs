@@ -292,13 +292,7 @@ fn tile_with(
     skin: Option<&Skin>,
     resolution: usize,
 ) -> Result<(Mesh, TileStats), TileError> {
-    check_elements(
-        elements,
-        reference_element(elements.nodes.kind),
-        solid,
-        resolution,
-    )?;
-    let lattice = lattice_of(elements.shape, resolution);
+    let lattice = checked_lattice(elements, solid, resolution)?;
     tile_on(elements, elements.nodes, lattice.as_ref(), solid, skin)
 }
 
@@ -311,13 +305,7 @@ fn stream_with(
     chunk_elements: usize,
     sink: &mut ChunkSink,
 ) -> Result<TileStats, TileError> {
-    check_elements(
-        elements,
-        reference_element(elements.nodes.kind),
-        solid,
-        resolution,
-    )?;
-    let lattice = lattice_of(elements.shape, resolution);
+    let lattice = checked_lattice(elements, solid, resolution)?;
     let nodes = elements.nodes;
     stream_on(
         elements,
@@ -352,6 +340,17 @@ fn check_elements<S: ElementShape + PartialEq + std::fmt::Debug>(
         solid,
         resolution,
     )
+}
+
+/// The 3D elements checked ([`check_elements`]), and their lattice at `resolution`.
+fn checked_lattice(
+    elements: &Elements,
+    solid: &TiledSolid,
+    resolution: usize,
+) -> Result<Box<dyn Lattice>, TileError> {
+    let reference = reference_element(elements.nodes.kind);
+    check_elements(elements, reference, solid, resolution)?;
+    Ok(lattice_of(elements.shape, resolution))
 }
 
 fn lattice_of(shape: Element3, resolution: usize) -> Box<dyn Lattice> {
