@@ -41,6 +41,7 @@ use latticebuild_geom::tile::{
     reference_element, region_svg, stream_scaffold, thickness_normal, tile_surface_scaffold,
 };
 use latticebuild_geom::validate::{PieceCounter, StreamCheck};
+use std::collections::VecDeque;
 use std::sync::Arc;
 
 use super::StageError;
@@ -366,6 +367,9 @@ impl TileStage {
         // where a check thread of its own was the pipeline's slowest stage.
         let mut check = StreamCheck::new();
         let mut pieces = PieceCounter::new();
+        // The chunks handed on, oldest first, until the writers are done with them: their
+        // arrays then serve the chunks tiled next (`MeshChunk::recycle`).
+        let mut in_flight: VecDeque<Arc<MeshChunk>> = VecDeque::new();
         let stats = stream_scaffold(
             &scaffold,
             &solid,
@@ -378,6 +382,12 @@ impl TileStage {
                 chunks(Arc::clone(&chunk)).map_err(|e| e.to_string())?;
                 // Both on the pool: the piece count is serial, the check parallel inside.
                 rayon::join(|| check.push(&chunk), || pieces.push(&chunk));
+                in_flight.push_back(chunk);
+                while in_flight.front().is_some_and(|c| Arc::strong_count(c) == 1) {
+                    if let Some(Ok(done)) = in_flight.pop_front().map(Arc::try_unwrap) {
+                        done.recycle();
+                    }
+                }
                 Ok(())
             },
         )

@@ -25,6 +25,7 @@ pub mod mesh_read;
 pub mod mesh_sdf;
 pub mod periodic;
 pub mod scaffold;
+mod scalar;
 pub mod spelling;
 pub mod stack_lang;
 pub mod symmetric;

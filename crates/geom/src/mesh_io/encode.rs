@@ -3,6 +3,7 @@
 //! Invariant: the bytes written are exactly those a sequential loop over the records would
 //! produce; parallelism only changes who encodes a block, never the order blocks are written.
 
+use super::Encoding;
 use rayon::prelude::*;
 use std::io::{self, Write};
 
@@ -25,7 +26,12 @@ pub enum Workers {
     Caller,
 }
 
-/// [`write_encoded`] by `workers`.
+/// Encodes `items` with `encode` and writes the result to `out`, in order, by `workers`.
+///
+/// With [`Workers::Pool`], items /// Items are cut into blocks of `per_block`; a batch of blocks is encoded in parallel on the
+/// rayon pool into reusable buffers while the calling thread writes the previous batch. Two
+/// batches of buffers are alive at a time, so memory stays at a few MiB whatever the mesh size,
+/// and no allocation happens per record once the buffers have grown to their working size.
 pub(super) fn write_encoded_by<T, F>(
     workers: Workers,
     out: &mut dyn Write,
@@ -46,7 +52,7 @@ where
 
 /// Encodes `items` a block (at most `per_block` items) at a time with `encode_block`, which
 /// appends the block's records to the buffer, and writes the result to `out` in order: by the
-/// rayon pool while the calling thread writes (`Workers::Pool`, as [`write_encoded`]), or by
+/// rayon pool while the calling thread writes (`Workers::Pool`, as [`write_encoded_by`]), or by
 /// the caller alone. For encoders that gain from seeing many records at once.
 pub(super) fn write_blocks_by<T, F>(
     workers: Workers,
@@ -59,51 +65,16 @@ where
     T: Sync,
     F: Fn(&mut Vec<u8>, &[T]) + Sync,
 {
-    match workers {
-        Workers::Pool => write_encoded_blocks(out, items, per_block, encode_block),
-        Workers::Caller => {
-            let mut buf = Vec::new();
-            for block in items.chunks(per_block.max(1)) {
-                buf.clear();
-                encode_block(&mut buf, block);
-                out.write_all(&buf)?;
-            }
-            Ok(())
-        }
-    }
-}
-
-/// Encodes `items` with `encode` and writes the result to `out`, in order.
-///
-/// Items are cut into blocks of `per_block`; a batch of blocks is encoded in parallel on the
-/// rayon pool into reusable buffers while the calling thread writes the previous batch. Two
-/// batches of buffers are alive at a time, so memory stays at a few MiB whatever the mesh size,
-/// and no allocation happens per record once the buffers have grown to their working size.
-pub(super) fn write_encoded<T, F>(
-    out: &mut dyn Write,
-    items: &[T],
-    per_block: usize,
-    encode: F,
-) -> io::Result<()>
-where
-    T: Sync,
-    F: Fn(&mut Vec<u8>, &T) + Sync,
-{
-    write_encoded_by(Workers::Pool, out, items, per_block, encode)
-}
-
-/// [`write_encoded`] with an encoder of whole blocks.
-fn write_encoded_blocks<T, F>(
-    out: &mut dyn Write,
-    items: &[T],
-    per_block: usize,
-    encode_block: F,
-) -> io::Result<()>
-where
-    T: Sync,
-    F: Fn(&mut Vec<u8>, &[T]) + Sync,
-{
     let per_block = per_block.max(1);
+    if workers == Workers::Caller {
+        let mut buf = Vec::new();
+        for block in items.chunks(per_block) {
+            buf.clear();
+            encode_block(&mut buf, block);
+            out.write_all(&buf)?;
+        }
+        return Ok(());
+    }
     // Two blocks per thread keeps every thread busy even when blocks encode at uneven speed.
     let blocks_per_batch = 2 * rayon::current_num_threads().max(1);
     let mut batches = items.chunks(per_block * blocks_per_batch);
@@ -203,6 +174,83 @@ pub(super) fn push_indices(buf: &mut Vec<u8>, tri: &[u32; 3], base: u64) {
     push_uint(buf, u64::from(tri[2]) + base);
 }
 
+/// Byte order of a binary format's numbers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum ByteOrder {
+    Little,
+    Big,
+}
+
+impl ByteOrder {
+    #[inline]
+    fn f32(self, v: f32) -> [u8; 4] {
+        match self {
+            ByteOrder::Little => v.to_le_bytes(),
+            ByteOrder::Big => v.to_be_bytes(),
+        }
+    }
+
+    #[inline]
+    fn u32(self, v: u32) -> [u8; 4] {
+        match self {
+            ByteOrder::Little => v.to_le_bytes(),
+            ByteOrder::Big => v.to_be_bytes(),
+        }
+    }
+}
+
+/// Vertices, in order: binary, one record of three `f32` in `order` each; text, one line
+/// `x y z` each.
+pub(super) fn write_points(
+    out: &mut dyn Write,
+    vertices: &[[f32; 3]],
+    encoding: Encoding,
+    order: ByteOrder,
+) -> io::Result<()> {
+    const POINT_BYTES: usize = 12;
+    match encoding {
+        Encoding::Binary => {
+            let per_block = records_per_block(POINT_BYTES);
+            write_encoded_by(Workers::Pool, out, vertices, per_block, |buf, p| {
+                let mut record = [0u8; POINT_BYTES];
+                for (slot, &value) in record.chunks_exact_mut(4).zip(p) {
+                    slot.copy_from_slice(&order.f32(value));
+                }
+                buf.extend_from_slice(&record);
+            })
+        }
+        Encoding::Ascii => write_text_points(out, vertices, b""),
+    }
+}
+
+/// Triangles as polygons of three corners, in order: binary, one record each of `count` (the
+/// number 3 as the format spells it, at most 4 bytes) and the three indices as 32-bit integers
+/// in `order` (the writer has checked that they fit its signed ones, so the bits are equal);
+/// text, one line `3 a b c` each.
+pub(super) fn write_polygons(
+    out: &mut dyn Write,
+    triangles: &[[u32; 3]],
+    encoding: Encoding,
+    count: &[u8],
+    order: ByteOrder,
+) -> io::Result<()> {
+    match encoding {
+        Encoding::Binary => {
+            let head = count.len();
+            let per_block = records_per_block(head + 12);
+            write_encoded_by(Workers::Pool, out, triangles, per_block, |buf, tri| {
+                let mut record = [0u8; 16];
+                record[..head].copy_from_slice(count);
+                for (slot, &index) in record[head..head + 12].chunks_exact_mut(4).zip(tri) {
+                    slot.copy_from_slice(&order.u32(index));
+                }
+                buf.extend_from_slice(&record[..head + 12]);
+            })
+        }
+        Encoding::Ascii => write_text_faces(out, triangles, b"3 ", 0),
+    }
+}
+
 /// Bytes of one text point line, for sizing blocks: three shortest-form f32 and separators.
 const TEXT_POINT_BYTES: usize = 48;
 /// Bytes of one text face line.
@@ -215,7 +263,7 @@ pub(super) fn write_text_points(
     prefix: &[u8],
 ) -> io::Result<()> {
     let per_block = records_per_block(TEXT_POINT_BYTES + prefix.len());
-    write_encoded(out, vertices, per_block, |buf, p| {
+    write_encoded_by(Workers::Pool, out, vertices, per_block, |buf, p| {
         buf.extend_from_slice(prefix);
         push_point(buf, p);
         buf.push(b'\n');
@@ -230,7 +278,7 @@ pub(super) fn write_text_faces(
     base: u64,
 ) -> io::Result<()> {
     let per_block = records_per_block(TEXT_FACE_BYTES + prefix.len());
-    write_encoded(out, triangles, per_block, |buf, tri| {
+    write_encoded_by(Workers::Pool, out, triangles, per_block, |buf, tri| {
         buf.extend_from_slice(prefix);
         push_indices(buf, tri, base);
         buf.push(b'\n');
@@ -283,7 +331,7 @@ mod tests {
     fn blocks_are_written_in_order() {
         let items: Vec<u32> = (0..100_003).collect();
         let mut out = Vec::new();
-        write_encoded(&mut out, &items, 7, |buf, &v| {
+        write_encoded_by(Workers::Pool, &mut out, &items, 7, |buf, &v| {
             buf.extend_from_slice(&v.to_le_bytes())
         })
         .expect("vec write");

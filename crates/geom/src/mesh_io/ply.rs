@@ -10,12 +10,9 @@
 //! bytes of the whole mesh.
 
 use super::Encoding;
-use super::encode::{records_per_block, write_encoded, write_text_faces, write_text_points};
+use super::encode::{ByteOrder, write_points, write_polygons};
 use crate::mesh::Mesh;
 use std::io::{self, Write};
-
-const VERTEX_BYTES: usize = 12;
-const FACE_BYTES: usize = 13;
 
 pub(super) fn write(mesh: &Mesh, encoding: Encoding, out: &mut dyn Write) -> io::Result<()> {
     header(
@@ -55,38 +52,14 @@ pub(super) fn vertices(
     encoding: Encoding,
     out: &mut dyn Write,
 ) -> io::Result<()> {
-    match encoding {
-        Encoding::Binary => {
-            write_encoded(out, vertices, records_per_block(VERTEX_BYTES), |buf, p| {
-                let mut record = [0u8; VERTEX_BYTES];
-                for (slot, value) in record.chunks_exact_mut(4).zip(p) {
-                    slot.copy_from_slice(&value.to_le_bytes());
-                }
-                buf.extend_from_slice(&record);
-            })
-        }
-        Encoding::Ascii => write_text_points(out, vertices, b""),
-    }
+    write_points(out, vertices, encoding, ByteOrder::Little)
 }
 
-/// Face records, in order.
+/// Face records, in order: the corner count as a `uchar`, then three `int` indices.
 pub(super) fn faces(
     triangles: &[[u32; 3]],
     encoding: Encoding,
     out: &mut dyn Write,
 ) -> io::Result<()> {
-    match encoding {
-        Encoding::Binary => {
-            write_encoded(out, triangles, records_per_block(FACE_BYTES), |buf, tri| {
-                let mut record = [3u8; FACE_BYTES];
-                for (slot, index) in record[1..].chunks_exact_mut(4).zip(tri) {
-                    // In range for i32 by the vertex-count check of the header, so the bits are
-                    // equal.
-                    slot.copy_from_slice(&index.to_le_bytes());
-                }
-                buf.extend_from_slice(&record);
-            })
-        }
-        Encoding::Ascii => write_text_faces(out, triangles, b"3 ", 0),
-    }
+    write_polygons(out, triangles, encoding, &[3], ByteOrder::Little)
 }

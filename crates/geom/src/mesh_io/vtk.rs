@@ -15,12 +15,9 @@
 //! the `4M` size are 32-bit signed, which bounds vertex and triangle counts.
 
 use super::Encoding;
-use super::encode::{records_per_block, write_encoded, write_text_faces, write_text_points};
+use super::encode::{ByteOrder, write_points, write_polygons};
 use crate::mesh::Mesh;
 use std::io::{self, Write};
-
-const POINT_BYTES: usize = 12;
-const POLYGON_BYTES: usize = 16;
 
 pub(super) fn write(mesh: &Mesh, encoding: Encoding, out: &mut dyn Write) -> io::Result<()> {
     let (nv, nt) = (mesh.vertices.len() as u64, mesh.triangles.len() as u64);
@@ -60,18 +57,7 @@ pub(super) fn points(
     encoding: Encoding,
     out: &mut dyn Write,
 ) -> io::Result<()> {
-    match encoding {
-        Encoding::Binary => {
-            write_encoded(out, vertices, records_per_block(POINT_BYTES), |buf, p| {
-                let mut record = [0u8; POINT_BYTES];
-                for (slot, value) in record.chunks_exact_mut(4).zip(p) {
-                    slot.copy_from_slice(&value.to_be_bytes());
-                }
-                buf.extend_from_slice(&record);
-            })
-        }
-        Encoding::Ascii => write_text_points(out, vertices, b""),
-    }
+    write_points(out, vertices, encoding, ByteOrder::Big)
 }
 
 /// The `POLYGONS` line between the sections (a binary section ends with its own newline).
@@ -83,30 +69,19 @@ pub(super) fn polygons_header(nt: u64, encoding: Encoding, out: &mut dyn Write) 
     }
 }
 
-/// Polygon records, in order.
+/// Polygon records, in order: the corner count and three indices, each an `int`.
 pub(super) fn polygons(
     triangles: &[[u32; 3]],
     encoding: Encoding,
     out: &mut dyn Write,
 ) -> io::Result<()> {
-    match encoding {
-        Encoding::Binary => write_encoded(
-            out,
-            triangles,
-            records_per_block(POLYGON_BYTES),
-            |buf, tri| {
-                let mut record = [0u8; POLYGON_BYTES];
-                record[..4].copy_from_slice(&3i32.to_be_bytes());
-                for (slot, index) in record[4..].chunks_exact_mut(4).zip(tri) {
-                    // In range for i32 by the vertex-count check of the header, so the bits are
-                    // equal.
-                    slot.copy_from_slice(&index.to_be_bytes());
-                }
-                buf.extend_from_slice(&record);
-            },
-        ),
-        Encoding::Ascii => write_text_faces(out, triangles, b"3 ", 0),
-    }
+    write_polygons(
+        out,
+        triangles,
+        encoding,
+        &3i32.to_be_bytes(),
+        ByteOrder::Big,
+    )
 }
 
 /// What follows the polygons: the binary section's newline.

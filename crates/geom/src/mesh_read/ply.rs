@@ -12,50 +12,23 @@
 
 use super::text::{self, Tokens};
 use super::{Format, Location, MeshReadError, TriangleSoup};
+use crate::scalar::Scalar;
 
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Scalar {
-    I8,
-    U8,
-    I16,
-    U16,
-    I32,
-    U32,
-    I64,
-    U64,
-    F32,
-    F64,
-}
-
-impl Scalar {
-    fn parse(name: &[u8]) -> Option<Scalar> {
-        Some(match name {
-            b"char" | b"int8" => Scalar::I8,
-            b"uchar" | b"uint8" => Scalar::U8,
-            b"short" | b"int16" => Scalar::I16,
-            b"ushort" | b"uint16" => Scalar::U16,
-            b"int" | b"int32" => Scalar::I32,
-            b"uint" | b"uint32" => Scalar::U32,
-            b"int64" => Scalar::I64,
-            b"uint64" => Scalar::U64,
-            b"float" | b"float32" => Scalar::F32,
-            b"double" | b"float64" => Scalar::F64,
-            _ => return None,
-        })
-    }
-
-    fn size(self) -> usize {
-        match self {
-            Scalar::I8 | Scalar::U8 => 1,
-            Scalar::I16 | Scalar::U16 => 2,
-            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
-            Scalar::I64 | Scalar::U64 | Scalar::F64 => 8,
-        }
-    }
-
-    fn is_integer(self) -> bool {
-        !matches!(self, Scalar::F32 | Scalar::F64)
-    }
+/// A PLY type name's type.
+fn ply_type(name: &[u8]) -> Option<Scalar> {
+    Some(match name {
+        b"char" | b"int8" => Scalar::I8,
+        b"uchar" | b"uint8" => Scalar::U8,
+        b"short" | b"int16" => Scalar::I16,
+        b"ushort" | b"uint16" => Scalar::U16,
+        b"int" | b"int32" => Scalar::I32,
+        b"uint" | b"uint32" => Scalar::U32,
+        b"int64" => Scalar::I64,
+        b"uint64" => Scalar::U64,
+        b"float" | b"float32" => Scalar::F32,
+        b"double" | b"float64" => Scalar::F64,
+        _ => return None,
+    })
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -168,7 +141,7 @@ fn header(bytes: &[u8]) -> Result<Header, MeshReadError> {
                 };
                 let ty = tokens.next().unwrap_or_default();
                 let scalar = |token: &[u8]| {
-                    Scalar::parse(token).ok_or_else(|| unexpected(at, "a PLY type", token))
+                    ply_type(token).ok_or_else(|| unexpected(at, "a PLY type", token))
                 };
                 let kind = if ty == b"list" {
                     let count = scalar(tokens.next().unwrap_or_default())?;
@@ -275,26 +248,8 @@ impl Body<'_> {
                         expected: what(),
                     });
                 };
-                let mut buf = [0u8; 8];
-                buf[..size].copy_from_slice(raw);
-                if *big {
-                    buf[..size].reverse();
-                }
                 *pos += size;
-                let b2 = [buf[0], buf[1]];
-                let b4 = [buf[0], buf[1], buf[2], buf[3]];
-                Ok(match ty {
-                    Scalar::I8 => f64::from(buf[0] as i8),
-                    Scalar::U8 => f64::from(buf[0]),
-                    Scalar::I16 => f64::from(i16::from_le_bytes(b2)),
-                    Scalar::U16 => f64::from(u16::from_le_bytes(b2)),
-                    Scalar::I32 => f64::from(i32::from_le_bytes(b4)),
-                    Scalar::U32 => f64::from(u32::from_le_bytes(b4)),
-                    Scalar::I64 => i64::from_le_bytes(buf) as f64,
-                    Scalar::U64 => u64::from_le_bytes(buf) as f64,
-                    Scalar::F32 => f64::from(f32::from_le_bytes(b4)),
-                    Scalar::F64 => f64::from_le_bytes(buf),
-                })
+                Ok(ty.decode(raw, *big))
             }
         }
     }

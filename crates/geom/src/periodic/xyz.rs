@@ -76,97 +76,139 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<Crystal, CrystalError> {
         .get(1)
         .ok_or_else(|| error(file, 2, 0, "missing the comment line with `Lattice=\"…\"`"))?;
     let pairs = pairs(comment);
-    let lattice = pairs
-        .iter()
-        .find(|(k, ..)| k.eq_ignore_ascii_case("lattice"))
-        .ok_or_else(|| {
-            error(
-                file,
-                2,
-                0,
-                "no `Lattice=\"ax ay az bx by bz cx cy cz\"` on the comment line",
-            )
-        })?;
-    let numbers: Vec<f64> = lattice
-        .1
-        .split_whitespace()
-        .map(str::parse::<f64>)
-        .collect::<Result<_, _>>()
-        .map_err(|_| error(file, 2, lattice.2, "`Lattice` must be 9 numbers"))?;
-    if numbers.len() != 9 || numbers.iter().any(|v| !v.is_finite()) {
-        return Err(error(
-            file,
-            2,
-            lattice.2,
-            "`Lattice` must be 9 finite numbers",
-        ));
-    }
-    let vectors: [[f64; 3]; 3] =
-        std::array::from_fn(|v| std::array::from_fn(|c| numbers[3 * v + c]));
-    // Columns of M are a, b, c: r = M f.
-    let m: [[f64; 3]; 3] = std::array::from_fn(|r| std::array::from_fn(|c| vectors[c][r]));
-    let lengths = vectors.map(|v| v.iter().map(|c| c * c).sum::<f64>().sqrt());
-    let flat = || {
-        error(
-            file,
-            2,
-            lattice.2,
-            "the lattice vectors span no volume (one is zero or they lie in a plane)",
-        )
-    };
-    // Finite numbers can still overflow in the lengths (`1e308`), which would make the
-    // flatness test below meaningless and put atoms at NaN.
-    let out_of_range = || {
-        error(
-            file,
-            2,
-            lattice.2,
-            "`Lattice` is out of range: its lengths or inverse overflow",
-        )
-    };
-    if lengths.iter().any(|v| !v.is_finite()) {
-        return Err(out_of_range());
-    }
-    // Judged by the volume relative to the edges' lengths, as a CIF's angles are, so that
-    // neither the unit nor the cell's size decides whether it is flat.
-    let unit_volume = det3(m) / (lengths[0] * lengths[1] * lengths[2]);
-    // NaN (a zero edge) is flat too.
-    let spans = (unit_volume * unit_volume).partial_cmp(&super::FLAT_CELL);
-    if spans != Some(std::cmp::Ordering::Greater) {
-        return Err(flat());
-    }
-    let to_fractional = invert(m).ok_or_else(flat)?;
-    if to_fractional.iter().flatten().any(|v| !v.is_finite()) {
-        return Err(out_of_range());
-    }
-
-    let (species_column, position_column) = match pairs
+    let cell = XyzLattice::new(file, &pairs)?;
+    let columns = match pairs
         .iter()
         .find(|(k, ..)| k.eq_ignore_ascii_case("properties"))
     {
         None => (0, 1),
         Some((_, spec, column)) => properties(file, spec, *column)?,
     };
-
-    let angle = |i: usize, j: usize| {
-        let dot: f64 = (0..3).map(|c| vectors[i][c] * vectors[j][c]).sum();
-        (dot / (lengths[i] * lengths[j]))
-            .clamp(-1.0, 1.0)
-            .acos()
-            .to_degrees()
-    };
     // The count is the file's word: reserve no more than there are lines for.
     let mut sites = Vec::with_capacity(count.min(lines.len().saturating_sub(2)));
     for n in 0..count {
-        let number = n + 3;
         let line = lines.get(n + 2).ok_or_else(|| {
             error(
                 file,
-                number,
+                n + 3,
                 0,
                 format!("expected {count} atoms, the file ends after {n}"),
             )
         })?;
+        sites.push(cell.atom(file, n, line, columns)?);
+    }
+    Ok(Crystal {
+        name: comment.trim().to_string(),
+        lengths: cell.lengths,
+        angles: [cell.angle(1, 2), cell.angle(0, 2), cell.angle(0, 1)],
+        sites,
+        operations: vec![SymOp::IDENTITY],
+    })
+}
+
+/// The comment line's lattice.
+struct XyzLattice {
+    /// a, b, c.
+    vectors: [[f64; 3]; 3],
+    lengths: [f64; 3],
+    /// Cartesian to fractional coordinates.
+    to_fractional: [[f64; 3]; 3],
+}
+
+impl XyzLattice {
+    /// The `Lattice` of the comment line's `pairs`: nine finite numbers spanning a volume.
+    fn new(file: &str, pairs: &[(String, String, usize)]) -> Result<XyzLattice, CrystalError> {
+        let lattice = pairs
+            .iter()
+            .find(|(k, ..)| k.eq_ignore_ascii_case("lattice"))
+            .ok_or_else(|| {
+                error(
+                    file,
+                    2,
+                    0,
+                    "no `Lattice=\"ax ay az bx by bz cx cy cz\"` on the comment line",
+                )
+            })?;
+        let numbers: Vec<f64> = lattice
+            .1
+            .split_whitespace()
+            .map(str::parse::<f64>)
+            .collect::<Result<_, _>>()
+            .map_err(|_| error(file, 2, lattice.2, "`Lattice` must be 9 numbers"))?;
+        if numbers.len() != 9 || numbers.iter().any(|v| !v.is_finite()) {
+            return Err(error(
+                file,
+                2,
+                lattice.2,
+                "`Lattice` must be 9 finite numbers",
+            ));
+        }
+        let vectors: [[f64; 3]; 3] =
+            std::array::from_fn(|v| std::array::from_fn(|c| numbers[3 * v + c]));
+        // Columns of M are a, b, c: r = M f.
+        let m: [[f64; 3]; 3] = std::array::from_fn(|r| std::array::from_fn(|c| vectors[c][r]));
+        let lengths = vectors.map(|v| v.iter().map(|c| c * c).sum::<f64>().sqrt());
+        let flat = || {
+            error(
+                file,
+                2,
+                lattice.2,
+                "the lattice vectors span no volume (one is zero or they lie in a plane)",
+            )
+        };
+        // Finite numbers can still overflow in the lengths (`1e308`), which would make the
+        // flatness test below meaningless and put atoms at NaN.
+        let out_of_range = || {
+            error(
+                file,
+                2,
+                lattice.2,
+                "`Lattice` is out of range: its lengths or inverse overflow",
+            )
+        };
+        if lengths.iter().any(|v| !v.is_finite()) {
+            return Err(out_of_range());
+        }
+        // Judged by the volume relative to the edges' lengths, as a CIF's angles are, so that
+        // neither the unit nor the cell's size decides whether it is flat.
+        let unit_volume = det3(m) / (lengths[0] * lengths[1] * lengths[2]);
+        // NaN (a zero edge) is flat too.
+        let spans = (unit_volume * unit_volume).partial_cmp(&super::FLAT_CELL);
+        if spans != Some(std::cmp::Ordering::Greater) {
+            return Err(flat());
+        }
+        let to_fractional = invert(m).ok_or_else(flat)?;
+        if to_fractional.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(out_of_range());
+        }
+        Ok(XyzLattice {
+            vectors,
+            lengths,
+            to_fractional,
+        })
+    }
+
+    /// The angle between vectors `i` and `j`, in degrees.
+    fn angle(&self, i: usize, j: usize) -> f64 {
+        let dot: f64 = (0..3)
+            .map(|c| self.vectors[i][c] * self.vectors[j][c])
+            .sum();
+        (dot / (self.lengths[i] * self.lengths[j]))
+            .clamp(-1.0, 1.0)
+            .acos()
+            .to_degrees()
+    }
+
+    /// Atom `n` (0-based) from its `line`, whose species and first position columns are
+    /// `columns`.
+    fn atom(
+        &self,
+        file: &str,
+        n: usize,
+        line: &str,
+        (species_column, position_column): (usize, usize),
+    ) -> Result<Site, CrystalError> {
+        let number = n + 3;
         let words: Vec<(usize, &str)> = word_columns(line);
         let word = |c: usize| {
             words.get(c).copied().ok_or_else(|| {
@@ -196,7 +238,7 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<Crystal, CrystalError> {
                 })?;
         }
         let fract: [f64; 3] =
-            std::array::from_fn(|i| (0..3).map(|j| to_fractional[i][j] * r[j]).sum());
+            std::array::from_fn(|i| (0..3).map(|j| self.to_fractional[i][j] * r[j]).sum());
         if fract.iter().any(|f| !f.is_finite()) {
             return Err(error(
                 file,
@@ -209,19 +251,12 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<Crystal, CrystalError> {
             .chars()
             .take_while(|c| c.is_ascii_alphabetic())
             .collect();
-        sites.push(Site {
+        Ok(Site {
             label: format!("{element}{}", n + 1),
             species: element,
             fract,
-        });
+        })
     }
-    Ok(Crystal {
-        name: comment.trim().to_string(),
-        lengths,
-        angles: [angle(1, 2), angle(0, 2), angle(0, 1)],
-        sites,
-        operations: vec![SymOp::IDENTITY],
-    })
 }
 
 fn det3(m: [[f64; 3]; 3]) -> f64 {

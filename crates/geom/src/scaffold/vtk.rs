@@ -16,6 +16,7 @@ use super::assemble::{ElementType, RawMesh, RawNodeData};
 use super::cursor::{Cursor, Locator, show};
 use super::xml::{Tag, base64_decode, find, next_tag};
 use super::{ElementKind, Scaffold, ScaffoldError};
+use crate::scalar::Scalar;
 
 const HEX20_FROM_VTK: [usize; 20] = [
     0, 1, 2, 3, 4, 5, 6, 7, 8, 11, 16, 9, 17, 10, 18, 19, 12, 15, 13, 14,
@@ -150,6 +151,46 @@ fn to_index(v: f64, what: &str, loc: Locator<'_>, at: usize) -> Result<u64, Scaf
 
 pub(super) fn read_legacy(bytes: &[u8], name: &str) -> Result<Scaffold, ScaffoldError> {
     let mut cur = Cursor::new(bytes, name);
+    let version_51 = legacy_header(&mut cur)?;
+    let binary = cur.loc.binary;
+    let mut grid = LegacyGrid {
+        raw: RawMesh {
+            indices_as_tags: true,
+            ..RawMesh::default()
+        },
+        cells: None,
+        cell_starts: Vec::new(),
+        types: None,
+        counts_51: (0, 0),
+    };
+    while let Some((at, keyword)) = cur.next_token() {
+        let word = keyword.to_ascii_uppercase();
+        match word.as_slice() {
+            b"POINTS" => grid.points(&mut cur, binary)?,
+            b"CELLS" => grid.cells(&mut cur, binary, version_51, at)?,
+            b"OFFSETS" | b"CONNECTIVITY" => {
+                grid.array_51(&mut cur, binary, word.as_slice() == b"OFFSETS", at)?
+            }
+            b"CELL_TYPES" => grid.cell_types(&mut cur, binary)?,
+            b"CELL_DATA" | b"POINT_DATA" | b"FIELD" | b"METADATA" => break,
+            _ => {
+                return Err(cur.error(
+                    at,
+                    format!(
+                        "expected POINTS, CELLS or CELL_TYPES, found `{}`",
+                        show(keyword)
+                    ),
+                ));
+            }
+        }
+    }
+    grid.finish(cur.loc)
+}
+
+/// Reads a legacy file's header up to its `DATASET UNSTRUCTURED_GRID`, setting the cursor's
+/// encoding; whether the file is version 5.1 (cells as OFFSETS and CONNECTIVITY arrays).
+fn legacy_header(cur: &mut Cursor<'_>) -> Result<bool, ScaffoldError> {
+    let bytes = cur.bytes();
     cur.skip_line(); // # vtk DataFile Version x.y
     let version_51 = {
         let first = &bytes[..cur.pos.min(bytes.len())];
@@ -175,191 +216,162 @@ pub(super) fn read_legacy(bytes: &[u8], name: &str) -> Result<Scaffold, Scaffold
             ),
         ));
     }
-    let mut raw = RawMesh {
-        indices_as_tags: true,
-        ..RawMesh::default()
-    };
-    let mut cells: Option<(usize, Vec<u64>, Vec<u64>)> = None; // (at, ends, connectivity)
-    let mut cell_starts: Vec<usize> = Vec::new();
-    let mut types: Option<Vec<i64>> = None;
-    let mut counts_51 = (0usize, 0usize);
-    while let Some((at, keyword)) = cur.next_token() {
-        let word = keyword.to_ascii_uppercase();
-        match word.as_slice() {
-            b"POINTS" => {
-                let n = cur.count("the number of points", if binary { 12 } else { 6 })?;
-                let (tat, ty) = cur.token("the point data type")?;
-                let ty = scalar_type(ty).ok_or_else(|| {
-                    cur.error(tat, format!("unknown VTK data type `{}`", show(ty)))
-                })?;
-                if binary {
-                    cur.skip_line();
-                }
-                raw.nodes.reserve(n);
-                for i in 0..n {
-                    let at = cur.mark();
-                    let mut p = [0.0; 3];
-                    for c in &mut p {
-                        *c = legacy_number(&mut cur, binary, ty, "a point coordinate")?;
-                        super::cursor::finite(*c, "a point coordinate")
-                            .map_err(|m| cur.error(at, m))?;
-                    }
-                    raw.push_node(i as u64, p, at);
-                }
+    Ok(version_51)
+}
+
+/// What a legacy file's sections have given so far.
+struct LegacyGrid {
+    raw: RawMesh,
+    /// Where CELLS starts, each cell's end in the connectivity, and the connectivity.
+    cells: Option<(usize, Vec<u64>, Vec<u64>)>,
+    /// Where each cell starts (before 5.1).
+    cell_starts: Vec<usize>,
+    types: Option<Vec<i64>>,
+    /// 5.1: the declared lengths of the OFFSETS and CONNECTIVITY arrays.
+    counts_51: (usize, usize),
+}
+
+impl LegacyGrid {
+    /// `POINTS n type` and the coordinates.
+    fn points(&mut self, cur: &mut Cursor<'_>, binary: bool) -> Result<(), ScaffoldError> {
+        let n = cur.count("the number of points", if binary { 12 } else { 6 })?;
+        let ty = array_type(cur, "the point data type")?;
+        if binary {
+            cur.skip_line();
+        }
+        self.raw.nodes.reserve(n);
+        for i in 0..n {
+            let at = cur.mark();
+            let mut p = [0.0; 3];
+            for c in &mut p {
+                *c = legacy_number(cur, binary, ty, "a point coordinate")?;
+                super::cursor::finite(*c, "a point coordinate").map_err(|m| cur.error(at, m))?;
             }
-            b"CELLS" => {
-                let n = cur.count("the number of cells", 4)?;
-                let size = cur.count("the size of the cell list", if binary { 4 } else { 2 })?;
-                if binary {
-                    cur.skip_line();
-                }
-                if version_51 {
-                    // 5.1: CELLS <offsets> <connectivity>, then OFFSETS and CONNECTIVITY arrays.
-                    counts_51 = (n, size);
-                    cells = Some((at, Vec::new(), Vec::new()));
-                    continue;
-                }
-                let mut ends = Vec::with_capacity(n);
-                let mut connectivity = Vec::with_capacity(size);
-                for c in 0..n {
-                    let cat = cur.mark();
-                    cell_starts.push(cat);
-                    let k = legacy_index(&mut cur, binary, Scalar::I32, "a cell's point count")?;
-                    let k = cur.check_count(cat, k, "a cell's point count", 2)?;
-                    if connectivity.len() + k + c + 1 > size {
-                        return Err(cur.error(
-                            cat,
-                            format!("the cell list is longer than its declared size {size}"),
-                        ));
-                    }
-                    for _ in 0..k {
-                        connectivity.push(legacy_index(
-                            &mut cur,
-                            binary,
-                            Scalar::I32,
-                            "a point index",
-                        )?);
-                    }
-                    ends.push(connectivity.len() as u64);
-                }
-                cells = Some((at, ends, connectivity));
-            }
-            b"OFFSETS" | b"CONNECTIVITY" => {
-                let (tat, ty) = cur.token("the array's data type")?;
-                let ty = scalar_type(ty).ok_or_else(|| {
-                    cur.error(tat, format!("unknown VTK data type `{}`", show(ty)))
-                })?;
-                if binary {
-                    cur.skip_line();
-                }
-                let is_offsets = word.as_slice() == b"OFFSETS";
-                let declared = if is_offsets { counts_51.0 } else { counts_51.1 };
-                let declared = cur.check_count(
-                    at,
-                    declared as u64,
-                    "the array length",
-                    if binary { ty.size() } else { 2 },
-                )?;
-                let mut values = Vec::with_capacity(declared);
-                for _ in 0..declared {
-                    values.push(legacy_index(&mut cur, binary, ty, "an index")?);
-                }
-                let Some((_, ends, conn)) = cells.as_mut() else {
-                    return Err(cur.error(at, "OFFSETS or CONNECTIVITY before CELLS"));
-                };
-                if is_offsets {
-                    *ends = values.into_iter().skip(1).collect();
-                } else {
-                    *conn = values;
-                }
-            }
-            b"CELL_TYPES" => {
-                let n = cur.count("the number of cell types", if binary { 4 } else { 2 })?;
-                if binary {
-                    cur.skip_line();
-                }
-                let mut t = Vec::with_capacity(n);
-                for _ in 0..n {
-                    let at = cur.mark();
-                    let v = legacy_index(&mut cur, binary, Scalar::I32, "a cell type")?;
-                    t.push(i64::try_from(v).map_err(|_| cur.error(at, "cell type out of range"))?);
-                }
-                types = Some(t);
-            }
-            b"CELL_DATA" | b"POINT_DATA" | b"FIELD" | b"METADATA" => break,
-            _ => {
+            self.raw.push_node(i as u64, p, at);
+        }
+        Ok(())
+    }
+
+    /// `CELLS n size` (keyword at `at`) and, before 5.1, the cell list.
+    fn cells(
+        &mut self,
+        cur: &mut Cursor<'_>,
+        binary: bool,
+        version_51: bool,
+        at: usize,
+    ) -> Result<(), ScaffoldError> {
+        let n = cur.count("the number of cells", 4)?;
+        let size = cur.count("the size of the cell list", if binary { 4 } else { 2 })?;
+        if binary {
+            cur.skip_line();
+        }
+        if version_51 {
+            // 5.1: CELLS <offsets> <connectivity>, then OFFSETS and CONNECTIVITY arrays.
+            self.counts_51 = (n, size);
+            self.cells = Some((at, Vec::new(), Vec::new()));
+            return Ok(());
+        }
+        let mut ends = Vec::with_capacity(n);
+        let mut connectivity = Vec::with_capacity(size);
+        for c in 0..n {
+            let cat = cur.mark();
+            self.cell_starts.push(cat);
+            let k = legacy_index(cur, binary, Scalar::I32, "a cell's point count")?;
+            let k = cur.check_count(cat, k, "a cell's point count", 2)?;
+            if connectivity.len() + k + c + 1 > size {
                 return Err(cur.error(
-                    at,
-                    format!(
-                        "expected POINTS, CELLS or CELL_TYPES, found `{}`",
-                        show(keyword)
-                    ),
+                    cat,
+                    format!("the cell list is longer than its declared size {size}"),
                 ));
             }
+            for _ in 0..k {
+                connectivity.push(legacy_index(cur, binary, Scalar::I32, "a point index")?);
+            }
+            ends.push(connectivity.len() as u64);
         }
+        self.cells = Some((at, ends, connectivity));
+        Ok(())
     }
-    let loc = cur.loc;
-    let (cells_at, ends, connectivity) = cells.ok_or_else(|| {
-        loc.file_error("no CELLS section: expected the cells of an unstructured grid")
-    })?;
-    let types =
-        types.ok_or_else(|| loc.file_error("no CELL_TYPES section: expected one type per cell"))?;
-    if types.len() != ends.len() {
-        return Err(loc.error(
-            cells_at,
-            format!("{} cells but {} cell types", ends.len(), types.len()),
-        ));
+
+    /// 5.1's `OFFSETS type` or `CONNECTIVITY type` (keyword at `at`) and its values.
+    fn array_51(
+        &mut self,
+        cur: &mut Cursor<'_>,
+        binary: bool,
+        is_offsets: bool,
+        at: usize,
+    ) -> Result<(), ScaffoldError> {
+        let ty = array_type(cur, "the array's data type")?;
+        if binary {
+            cur.skip_line();
+        }
+        let declared = if is_offsets {
+            self.counts_51.0
+        } else {
+            self.counts_51.1
+        };
+        let declared = cur.check_count(
+            at,
+            declared as u64,
+            "the array length",
+            if binary { ty.size() } else { 2 },
+        )?;
+        let mut values = Vec::with_capacity(declared);
+        for _ in 0..declared {
+            values.push(legacy_index(cur, binary, ty, "an index")?);
+        }
+        let Some((_, ends, conn)) = self.cells.as_mut() else {
+            return Err(cur.error(at, "OFFSETS or CONNECTIVITY before CELLS"));
+        };
+        if is_offsets {
+            *ends = values.into_iter().skip(1).collect();
+        } else {
+            *conn = values;
+        }
+        Ok(())
     }
-    let cell_at = |c: usize| cell_starts.get(c).copied().unwrap_or(cells_at);
-    add_cells(&mut raw, loc, &cell_at, &types, &ends, &connectivity)?;
-    raw.finish(loc)
+
+    /// `CELL_TYPES n` and the types.
+    fn cell_types(&mut self, cur: &mut Cursor<'_>, binary: bool) -> Result<(), ScaffoldError> {
+        let n = cur.count("the number of cell types", if binary { 4 } else { 2 })?;
+        if binary {
+            cur.skip_line();
+        }
+        let mut t = Vec::with_capacity(n);
+        for _ in 0..n {
+            let at = cur.mark();
+            let v = legacy_index(cur, binary, Scalar::I32, "a cell type")?;
+            t.push(i64::try_from(v).map_err(|_| cur.error(at, "cell type out of range"))?);
+        }
+        self.types = Some(t);
+        Ok(())
+    }
+
+    /// The scaffold, once every section is read.
+    fn finish(mut self, loc: Locator<'_>) -> Result<Scaffold, ScaffoldError> {
+        let (cells_at, ends, connectivity) = self.cells.ok_or_else(|| {
+            loc.file_error("no CELLS section: expected the cells of an unstructured grid")
+        })?;
+        let types = self
+            .types
+            .ok_or_else(|| loc.file_error("no CELL_TYPES section: expected one type per cell"))?;
+        if types.len() != ends.len() {
+            return Err(loc.error(
+                cells_at,
+                format!("{} cells but {} cell types", ends.len(), types.len()),
+            ));
+        }
+        let cell_starts = self.cell_starts;
+        let cell_at = |c: usize| cell_starts.get(c).copied().unwrap_or(cells_at);
+        add_cells(&mut self.raw, loc, &cell_at, &types, &ends, &connectivity)?;
+        self.raw.finish(loc)
+    }
 }
 
-#[derive(Clone, Copy, PartialEq)]
-enum Scalar {
-    I8,
-    U8,
-    I16,
-    U16,
-    I32,
-    U32,
-    I64,
-    U64,
-    F32,
-    F64,
-}
-
-impl Scalar {
-    fn size(self) -> usize {
-        match self {
-            Scalar::I8 | Scalar::U8 => 1,
-            Scalar::I16 | Scalar::U16 => 2,
-            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
-            Scalar::I64 | Scalar::U64 | Scalar::F64 => 8,
-        }
-    }
-
-    /// Decodes one value (`b.len() == self.size()`).
-    fn decode(self, b: &[u8], big_endian: bool) -> f64 {
-        let mut a = [0u8; 8];
-        a[..b.len()].copy_from_slice(b);
-        if big_endian {
-            a[..b.len()].reverse();
-        }
-        let [b0, b1, b2, b3, ..] = a;
-        match self {
-            Scalar::I8 => b0 as i8 as f64,
-            Scalar::U8 => b0 as f64,
-            Scalar::I16 => i16::from_le_bytes([b0, b1]) as f64,
-            Scalar::U16 => u16::from_le_bytes([b0, b1]) as f64,
-            Scalar::I32 => i32::from_le_bytes([b0, b1, b2, b3]) as f64,
-            Scalar::U32 => u32::from_le_bytes([b0, b1, b2, b3]) as f64,
-            Scalar::F32 => f32::from_le_bytes([b0, b1, b2, b3]) as f64,
-            Scalar::I64 => i64::from_le_bytes(a) as f64,
-            Scalar::U64 => u64::from_le_bytes(a) as f64,
-            Scalar::F64 => f64::from_le_bytes(a),
-        }
-    }
+/// A legacy data type name (`what` the token is, for messages).
+fn array_type(cur: &mut Cursor<'_>, what: &str) -> Result<Scalar, ScaffoldError> {
+    let (at, ty) = cur.token(what)?;
+    scalar_type(ty).ok_or_else(|| cur.error(at, format!("unknown VTK data type `{}`", show(ty))))
 }
 
 /// Legacy (`float`, `vtktypeint64`, …) and XML (`Float64`, `Int32`, …) type names.
@@ -443,6 +455,43 @@ pub(super) fn read_xml(bytes: &[u8], name: &str) -> Result<Scaffold, ScaffoldErr
         name,
         binary: false,
     };
+    let (file, arrays, piece) = scan_xml(loc)?;
+    let (piece_at, n_points, n_cells) = piece;
+    // zlib shrinks data by at most about 1000:1, so no honest file declares more than this.
+    let most = bytes.len().saturating_mul(1100);
+    if n_points.saturating_mul(3) > most || n_cells > most {
+        return Err(loc.error(
+            piece_at,
+            format!("Piece declares {n_points} points and {n_cells} cells, more than a file of {} bytes can hold", bytes.len()),
+        ));
+    }
+    let grid = XmlGrid {
+        file: &file,
+        arrays: &arrays,
+        piece_at,
+        appended_offsets: {
+            let mut offsets: Vec<usize> = arrays.iter().filter_map(|a| a.offset).collect();
+            offsets.sort_unstable();
+            offsets
+        },
+    };
+    let mut raw = RawMesh {
+        indices_as_tags: true,
+        ..RawMesh::default()
+    };
+    grid.points(&mut raw, n_points)?;
+    grid.cells(&mut raw, n_cells)?;
+    grid.point_data(&mut raw, n_points)?;
+    raw.finish(loc)
+}
+
+/// A Piece tag's start, and its numbers of points and cells.
+type PieceCounts = (usize, usize, usize);
+
+/// Reads a `.vtu` file's tags: its encoding, its DataArrays (where their data is, not yet
+/// decoded) and its one Piece.
+fn scan_xml(loc: Locator<'_>) -> Result<(XmlFile<'_>, Vec<DataArray>, PieceCounts), ScaffoldError> {
+    let bytes = loc.bytes;
     let mut file = XmlFile {
         loc,
         big_endian: false,
@@ -452,7 +501,7 @@ pub(super) fn read_xml(bytes: &[u8], name: &str) -> Result<Scaffold, ScaffoldErr
     };
     let mut arrays = Vec::new();
     let mut section = Section::Other;
-    let mut piece: Option<(usize, usize, usize)> = None;
+    let mut piece: Option<PieceCounts> = None;
     let mut saw_vtk = false;
     let mut pos = 0;
     while let Some(tag) = next_tag(bytes, pos) {
@@ -461,30 +510,7 @@ pub(super) fn read_xml(bytes: &[u8], name: &str) -> Result<Scaffold, ScaffoldErr
         match (tag.name, tag.closing) {
             (b"VTKFile", false) => {
                 saw_vtk = true;
-                if tag
-                    .attribute("type")
-                    .is_some_and(|t| t != b"UnstructuredGrid")
-                {
-                    return Err(loc.error(
-                        tag.start,
-                        format!(
-                            "expected a VTK UnstructuredGrid file, found type \"{}\"",
-                            tag.attribute_str("type").unwrap_or_default()
-                        ),
-                    ));
-                }
-                file.big_endian = tag.attribute("byte_order") == Some(b"BigEndian");
-                file.header64 = tag.attribute("header_type") == Some(b"UInt64");
-                match tag.attribute("compressor") {
-                    None | Some(b"") => {}
-                    Some(b"vtkZLibDataCompressor") => file.zlib = true,
-                    Some(other) => {
-                        return Err(loc.error(
-                            tag.start,
-                            format!("unsupported compressor \"{}\": expected vtkZLibDataCompressor or none", show(other)),
-                        ));
-                    }
-                }
+                file.read_attributes(&tag)?;
             }
             (b"Piece", false) => {
                 if piece.is_some() {
@@ -493,21 +519,7 @@ pub(super) fn read_xml(bytes: &[u8], name: &str) -> Result<Scaffold, ScaffoldErr
                         "more than one Piece: expected a single unstructured grid piece",
                     ));
                 }
-                let number = |key: &str| {
-                    tag.attribute(key)
-                        .and_then(|v| std::str::from_utf8(v).ok()?.trim().parse::<usize>().ok())
-                        .ok_or_else(|| {
-                            loc.error(
-                                tag.start,
-                                format!("Piece needs a {key} attribute (a non-negative integer)"),
-                            )
-                        })
-                };
-                piece = Some((
-                    tag.start,
-                    number("NumberOfPoints")?,
-                    number("NumberOfCells")?,
-                ));
+                piece = Some(piece_counts(&tag, loc)?);
             }
             (b"Points", closing) => {
                 section = if closing {
@@ -530,46 +542,7 @@ pub(super) fn read_xml(bytes: &[u8], name: &str) -> Result<Scaffold, ScaffoldErr
                     Section::PointData
                 }
             }
-            (b"DataArray", false) => {
-                let ty_name = tag.attribute("type").unwrap_or(b"");
-                let ty = scalar_type(ty_name).ok_or_else(|| {
-                    loc.error(
-                        tag.start,
-                        format!("DataArray has unknown type \"{}\"", show(ty_name)),
-                    )
-                })?;
-                let components = match tag.attribute("NumberOfComponents") {
-                    None => 1,
-                    Some(v) => std::str::from_utf8(v)
-                        .ok()
-                        .and_then(|s| s.trim().parse::<usize>().ok())
-                        .filter(|&c| (1..=64).contains(&c))
-                        .ok_or_else(|| {
-                            loc.error(tag.start, format!("bad NumberOfComponents \"{}\"", show(v)))
-                        })?,
-                };
-                let content_end = if tag.empty {
-                    tag.end
-                } else {
-                    bytes[tag.end..]
-                        .iter()
-                        .position(|&b| b == b'<')
-                        .map_or(bytes.len(), |k| tag.end + k)
-                };
-                let offset = tag
-                    .attribute("offset")
-                    .and_then(|v| std::str::from_utf8(v).ok()?.trim().parse::<usize>().ok());
-                arrays.push(DataArray {
-                    name: tag.attribute_str("Name").unwrap_or_default(),
-                    section,
-                    ty,
-                    components,
-                    format: tag.attribute("format").unwrap_or(b"ascii").to_vec(),
-                    at: tag.start,
-                    content: (tag.end, content_end),
-                    offset,
-                });
-            }
+            (b"DataArray", false) => arrays.push(DataArray::new(&tag, loc, section)?),
             (b"AppendedData", false) => {
                 let base64 = tag.attribute("encoding") != Some(b"raw");
                 let underscore = bytes[tag.end..]
@@ -587,104 +560,213 @@ pub(super) fn read_xml(bytes: &[u8], name: &str) -> Result<Scaffold, ScaffoldErr
     if !saw_vtk {
         return Err(loc.file_error("no <VTKFile> element: expected a VTK XML unstructured grid"));
     }
-    let (piece_at, n_points, n_cells) =
+    let piece =
         piece.ok_or_else(|| loc.file_error("no <Piece>: expected one unstructured grid piece"))?;
-    // zlib shrinks data by at most about 1000:1, so no honest file declares more than this.
-    let most = bytes.len().saturating_mul(1100);
-    if n_points.saturating_mul(3) > most || n_cells > most {
-        return Err(loc.error(
-            piece_at,
-            format!("Piece declares {n_points} points and {n_cells} cells, more than a file of {} bytes can hold", bytes.len()),
-        ));
+    Ok((file, arrays, piece))
+}
+
+/// A Piece tag's start, NumberOfPoints and NumberOfCells.
+fn piece_counts(tag: &Tag<'_>, loc: Locator<'_>) -> Result<PieceCounts, ScaffoldError> {
+    let number = |key: &str| {
+        tag.attribute(key)
+            .and_then(|v| std::str::from_utf8(v).ok()?.trim().parse::<usize>().ok())
+            .ok_or_else(|| {
+                loc.error(
+                    tag.start,
+                    format!("Piece needs a {key} attribute (a non-negative integer)"),
+                )
+            })
+    };
+    Ok((
+        tag.start,
+        number("NumberOfPoints")?,
+        number("NumberOfCells")?,
+    ))
+}
+
+impl DataArray {
+    /// A DataArray tag in `section`, its content up to the next tag.
+    fn new(tag: &Tag<'_>, loc: Locator<'_>, section: Section) -> Result<DataArray, ScaffoldError> {
+        let bytes = loc.bytes;
+        let ty_name = tag.attribute("type").unwrap_or(b"");
+        let ty = scalar_type(ty_name).ok_or_else(|| {
+            loc.error(
+                tag.start,
+                format!("DataArray has unknown type \"{}\"", show(ty_name)),
+            )
+        })?;
+        let components = match tag.attribute("NumberOfComponents") {
+            None => 1,
+            Some(v) => std::str::from_utf8(v)
+                .ok()
+                .and_then(|s| s.trim().parse::<usize>().ok())
+                .filter(|&c| (1..=64).contains(&c))
+                .ok_or_else(|| {
+                    loc.error(tag.start, format!("bad NumberOfComponents \"{}\"", show(v)))
+                })?,
+        };
+        let content_end = if tag.empty {
+            tag.end
+        } else {
+            bytes[tag.end..]
+                .iter()
+                .position(|&b| b == b'<')
+                .map_or(bytes.len(), |k| tag.end + k)
+        };
+        let offset = tag
+            .attribute("offset")
+            .and_then(|v| std::str::from_utf8(v).ok()?.trim().parse::<usize>().ok());
+        Ok(DataArray {
+            name: tag.attribute_str("Name").unwrap_or_default(),
+            section,
+            ty,
+            components,
+            format: tag.attribute("format").unwrap_or(b"ascii").to_vec(),
+            at: tag.start,
+            content: (tag.end, content_end),
+            offset,
+        })
     }
-    let find_array = |sec: Section, name: Option<&str>| {
-        arrays
+}
+
+/// A `.vtu` file's arrays, to be decoded into a mesh.
+struct XmlGrid<'g> {
+    file: &'g XmlFile<'g>,
+    arrays: &'g [DataArray],
+    /// Where the Piece tag starts (for messages).
+    piece_at: usize,
+    /// The appended arrays' offsets, in order (where each base64 array ends).
+    appended_offsets: Vec<usize>,
+}
+
+impl XmlGrid<'_> {
+    fn find(&self, section: Section, name: Option<&str>) -> Option<&DataArray> {
+        self.arrays
             .iter()
-            .find(|a| a.section == sec && name.is_none_or(|n| a.name.eq_ignore_ascii_case(n)))
-    };
-    let points = find_array(Section::Points, None).ok_or_else(|| {
-        loc.error(
-            piece_at,
-            "no Points DataArray: expected the point coordinates",
-        )
-    })?;
-    let mut appended_offsets: Vec<usize> = arrays.iter().filter_map(|a| a.offset).collect();
-    appended_offsets.sort_unstable();
-    if points.components != 3 {
-        return Err(loc.error(
-            points.at,
-            format!("Points has {} components, expected 3", points.components),
-        ));
+            .find(|a| a.section == section && name.is_none_or(|n| a.name.eq_ignore_ascii_case(n)))
     }
-    let coordinates = file.values(points, n_points * 3, &appended_offsets)?;
-    let mut raw = RawMesh {
-        indices_as_tags: true,
-        ..RawMesh::default()
-    };
-    for i in 0..n_points {
-        let p = [
-            coordinates[3 * i],
-            coordinates[3 * i + 1],
-            coordinates[3 * i + 2],
-        ];
-        if let Some(bad) = p.iter().find(|v| !v.is_finite()) {
+
+    fn values(&self, a: &DataArray, count: usize) -> Result<Vec<f64>, ScaffoldError> {
+        self.file.values(a, count, &self.appended_offsets)
+    }
+
+    /// The Points array's `n_points` points, as nodes.
+    fn points(&self, raw: &mut RawMesh, n_points: usize) -> Result<(), ScaffoldError> {
+        let loc = self.file.loc;
+        let points = self.find(Section::Points, None).ok_or_else(|| {
+            loc.error(
+                self.piece_at,
+                "no Points DataArray: expected the point coordinates",
+            )
+        })?;
+        if points.components != 3 {
             return Err(loc.error(
                 points.at,
-                format!("point {i}: expected a finite coordinate, found {bad}"),
+                format!("Points has {} components, expected 3", points.components),
             ));
         }
-        raw.push_node(i as u64, p, points.at);
+        let coordinates = self.values(points, n_points * 3)?;
+        for i in 0..n_points {
+            let p = [
+                coordinates[3 * i],
+                coordinates[3 * i + 1],
+                coordinates[3 * i + 2],
+            ];
+            if let Some(bad) = p.iter().find(|v| !v.is_finite()) {
+                return Err(loc.error(
+                    points.at,
+                    format!("point {i}: expected a finite coordinate, found {bad}"),
+                ));
+            }
+            raw.push_node(i as u64, p, points.at);
+        }
+        Ok(())
     }
-    let cell_array = |name: &str| {
-        find_array(Section::Cells, Some(name))
-            .ok_or_else(|| loc.error(piece_at, format!("no Cells DataArray \"{name}\"")))
-    };
-    let conn_array = cell_array("connectivity")?;
-    let offsets_array = cell_array("offsets")?;
-    let types_array = cell_array("types")?;
-    let offsets = file.values(offsets_array, n_cells, &appended_offsets)?;
-    let types = file.values(types_array, n_cells, &appended_offsets)?;
-    let ends: Vec<u64> = offsets
-        .iter()
-        .map(|&v| to_index(v, "a cell offset", loc, offsets_array.at))
-        .collect::<Result<_, _>>()?;
-    let conn_len = ends.last().copied().unwrap_or(0) as usize;
-    let connectivity: Vec<u64> = file
-        .values(conn_array, conn_len, &appended_offsets)?
-        .iter()
-        .map(|&v| to_index(v, "a point index", loc, conn_array.at))
-        .collect::<Result<_, _>>()?;
-    let types: Vec<i64> = types
-        .iter()
-        .map(|&v| to_index(v, "a cell type", loc, types_array.at).map(|t| t as i64))
-        .collect::<Result<_, _>>()?;
-    add_cells(
-        &mut raw,
-        loc,
-        &|_| conn_array.at,
-        &types,
-        &ends,
-        &connectivity,
-    )?;
-    for a in arrays
-        .iter()
-        .filter(|a| a.section == Section::PointData && a.components == 1)
-    {
-        let values = file.values(a, n_points, &appended_offsets)?;
-        raw.node_data.push(RawNodeData {
-            name: a.name.clone(),
-            at: a.at,
-            values: values
-                .iter()
-                .enumerate()
-                .map(|(i, &v)| (i as u64, v, a.at))
-                .collect(),
-        });
+
+    /// The `n_cells` cells of the Cells arrays connectivity, offsets and types.
+    fn cells(&self, raw: &mut RawMesh, n_cells: usize) -> Result<(), ScaffoldError> {
+        let loc = self.file.loc;
+        let cell_array = |name: &str| {
+            self.find(Section::Cells, Some(name))
+                .ok_or_else(|| loc.error(self.piece_at, format!("no Cells DataArray \"{name}\"")))
+        };
+        let conn_array = cell_array("connectivity")?;
+        let offsets_array = cell_array("offsets")?;
+        let types_array = cell_array("types")?;
+        let offsets = self.values(offsets_array, n_cells)?;
+        let types = self.values(types_array, n_cells)?;
+        let ends: Vec<u64> = offsets
+            .iter()
+            .map(|&v| to_index(v, "a cell offset", loc, offsets_array.at))
+            .collect::<Result<_, _>>()?;
+        let conn_len = ends.last().copied().unwrap_or(0) as usize;
+        let connectivity: Vec<u64> = self
+            .values(conn_array, conn_len)?
+            .iter()
+            .map(|&v| to_index(v, "a point index", loc, conn_array.at))
+            .collect::<Result<_, _>>()?;
+        let types: Vec<i64> = types
+            .iter()
+            .map(|&v| to_index(v, "a cell type", loc, types_array.at).map(|t| t as i64))
+            .collect::<Result<_, _>>()?;
+        add_cells(raw, loc, &|_| conn_array.at, &types, &ends, &connectivity)
     }
-    raw.finish(loc)
+
+    /// The one-component PointData arrays, as node data.
+    fn point_data(&self, raw: &mut RawMesh, n_points: usize) -> Result<(), ScaffoldError> {
+        for a in self
+            .arrays
+            .iter()
+            .filter(|a| a.section == Section::PointData && a.components == 1)
+        {
+            let values = self.values(a, n_points)?;
+            raw.node_data.push(RawNodeData {
+                name: a.name.clone(),
+                at: a.at,
+                values: values
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &v)| (i as u64, v, a.at))
+                    .collect(),
+            });
+        }
+        Ok(())
+    }
 }
 
 impl XmlFile<'_> {
+    /// The VTKFile tag's type, byte order, header type and compressor.
+    fn read_attributes(&mut self, tag: &Tag<'_>) -> Result<(), ScaffoldError> {
+        let loc = self.loc;
+        if tag
+            .attribute("type")
+            .is_some_and(|t| t != b"UnstructuredGrid")
+        {
+            return Err(loc.error(
+                tag.start,
+                format!(
+                    "expected a VTK UnstructuredGrid file, found type \"{}\"",
+                    tag.attribute_str("type").unwrap_or_default()
+                ),
+            ));
+        }
+        self.big_endian = tag.attribute("byte_order") == Some(b"BigEndian");
+        self.header64 = tag.attribute("header_type") == Some(b"UInt64");
+        match tag.attribute("compressor") {
+            None | Some(b"") => {}
+            Some(b"vtkZLibDataCompressor") => self.zlib = true,
+            Some(other) => {
+                return Err(loc.error(
+                    tag.start,
+                    format!(
+                        "unsupported compressor \"{}\": expected vtkZLibDataCompressor or none",
+                        show(other)
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
     /// Exactly `count` values of an array (components included), as f64.
     fn values(
         &self,
@@ -785,91 +867,16 @@ impl XmlFile<'_> {
     /// Header(s) + data of a binary array (raw or zlib blocks) to `count` values.
     fn unpack(&self, a: &DataArray, data: &[u8], count: usize) -> Result<Vec<f64>, ScaffoldError> {
         let loc = self.loc;
-        let h = if self.header64 { 8 } else { 4 };
         let mut cur = Cursor::new(data, loc.name);
         cur.big_endian = self.big_endian;
-        let trunc =
-            |what: &str| loc.error(a.at, format!("DataArray \"{}\": truncated {what}", a.name));
-        let header = |cur: &mut Cursor<'_>| -> Result<u64, ScaffoldError> {
-            if h == 8 {
-                cur.u64("a header").map_err(|_| trunc("header"))
-            } else {
-                cur.i32("a header")
-                    .map(|v| v as u32 as u64)
-                    .map_err(|_| trunc("header"))
-            }
-        };
         let payload: Vec<u8>;
         let body: &[u8] = if self.zlib {
-            let blocks = header(&mut cur)?;
-            let block_size = header(&mut cur)?;
-            let last_size = header(&mut cur)?;
-            let blocks = cur
-                .check_count(0, blocks, "the number of compressed blocks", h)
-                .map_err(|_| trunc("block list"))?;
-            let mut sizes = Vec::with_capacity(blocks);
-            for _ in 0..blocks {
-                sizes.push(header(&mut cur)?);
-            }
-            let expected = (count * a.ty.size()) as u64;
-            if blocks > 0
-                && block_size
-                    .saturating_mul(blocks as u64 - 1)
-                    .saturating_add(last_size)
-                    != expected
-            {
-                return Err(loc.error(
-                    a.at,
-                    format!(
-                        "DataArray \"{}\": compressed blocks hold {} bytes, expected {expected}",
-                        a.name,
-                        block_size
-                            .saturating_mul(blocks as u64 - 1)
-                            .saturating_add(last_size)
-                    ),
-                ));
-            }
-            let mut out = Vec::with_capacity(expected.min(data.len() as u64 * 1100) as usize);
-            for (b, &size) in sizes.iter().enumerate() {
-                let size = usize::try_from(size).map_err(|_| trunc("block"))?;
-                let block = cur
-                    .take(size, "a compressed block")
-                    .map_err(|_| trunc("compressed block"))?;
-                let limit = if b + 1 == blocks {
-                    last_size
-                } else {
-                    block_size
-                } as usize;
-                let inflated = miniz_oxide::inflate::decompress_to_vec_zlib_with_limit(
-                    block, limit,
-                )
-                .map_err(|e| {
-                    loc.error(
-                        a.at,
-                        format!(
-                            "DataArray \"{}\": bad zlib data in block {b} ({:?})",
-                            a.name, e.status
-                        ),
-                    )
-                })?;
-                if inflated.len() != limit {
-                    return Err(loc.error(
-                        a.at,
-                        format!(
-                            "DataArray \"{}\": block {b} inflates to {} bytes, expected {limit}",
-                            a.name,
-                            inflated.len()
-                        ),
-                    ));
-                }
-                out.extend_from_slice(&inflated);
-            }
-            payload = out;
+            payload = self.inflate(a, &mut cur, count)?;
             &payload
         } else {
-            let n = header(&mut cur)?;
-            let n = usize::try_from(n).map_err(|_| trunc("data"))?;
-            cur.take(n, "data").map_err(|_| trunc("data"))?
+            let n = self.header(a, &mut cur)?;
+            let n = usize::try_from(n).map_err(|_| truncated(loc, a, "data"))?;
+            cur.take(n, "data").map_err(|_| truncated(loc, a, "data"))?
         };
         let size = a.ty.size();
         if body.len() < count * size {
@@ -888,4 +895,97 @@ impl XmlFile<'_> {
             .map(|c| a.ty.decode(c, self.big_endian))
             .collect())
     }
+
+    /// One header number (UInt32 or UInt64) of array `a`'s binary data.
+    fn header(&self, a: &DataArray, cur: &mut Cursor<'_>) -> Result<u64, ScaffoldError> {
+        let trunc = || truncated(self.loc, a, "header");
+        if self.header64 {
+            cur.u64("a header").map_err(|_| trunc())
+        } else {
+            cur.i32("a header")
+                .map(|v| v as u32 as u64)
+                .map_err(|_| trunc())
+        }
+    }
+
+    /// The zlib blocks of array `a` (block list at `cur`), inflated: the bytes of `count`
+    /// values.
+    fn inflate(
+        &self,
+        a: &DataArray,
+        cur: &mut Cursor<'_>,
+        count: usize,
+    ) -> Result<Vec<u8>, ScaffoldError> {
+        let loc = self.loc;
+        let h = if self.header64 { 8 } else { 4 };
+        let trunc = |what: &str| truncated(loc, a, what);
+        let blocks = self.header(a, cur)?;
+        let block_size = self.header(a, cur)?;
+        let last_size = self.header(a, cur)?;
+        let blocks = cur
+            .check_count(0, blocks, "the number of compressed blocks", h)
+            .map_err(|_| trunc("block list"))?;
+        let mut sizes = Vec::with_capacity(blocks);
+        for _ in 0..blocks {
+            sizes.push(self.header(a, cur)?);
+        }
+        let expected = (count * a.ty.size()) as u64;
+        if blocks > 0
+            && block_size
+                .saturating_mul(blocks as u64 - 1)
+                .saturating_add(last_size)
+                != expected
+        {
+            return Err(loc.error(
+                a.at,
+                format!(
+                    "DataArray \"{}\": compressed blocks hold {} bytes, expected {expected}",
+                    a.name,
+                    block_size
+                        .saturating_mul(blocks as u64 - 1)
+                        .saturating_add(last_size)
+                ),
+            ));
+        }
+        let data_len = cur.bytes().len() as u64;
+        let mut out = Vec::with_capacity(expected.min(data_len * 1100) as usize);
+        for (b, &size) in sizes.iter().enumerate() {
+            let size = usize::try_from(size).map_err(|_| trunc("block"))?;
+            let block = cur
+                .take(size, "a compressed block")
+                .map_err(|_| trunc("compressed block"))?;
+            let limit = if b + 1 == blocks {
+                last_size
+            } else {
+                block_size
+            } as usize;
+            let inflated = miniz_oxide::inflate::decompress_to_vec_zlib_with_limit(block, limit)
+                .map_err(|e| {
+                    loc.error(
+                        a.at,
+                        format!(
+                            "DataArray \"{}\": bad zlib data in block {b} ({:?})",
+                            a.name, e.status
+                        ),
+                    )
+                })?;
+            if inflated.len() != limit {
+                return Err(loc.error(
+                    a.at,
+                    format!(
+                        "DataArray \"{}\": block {b} inflates to {} bytes, expected {limit}",
+                        a.name,
+                        inflated.len()
+                    ),
+                ));
+            }
+            out.extend_from_slice(&inflated);
+        }
+        Ok(out)
+    }
+}
+
+/// "truncated `what`" in array `a`.
+fn truncated(loc: Locator<'_>, a: &DataArray, what: &str) -> ScaffoldError {
+    loc.error(a.at, format!("DataArray \"{}\": truncated {what}", a.name))
 }

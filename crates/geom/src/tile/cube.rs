@@ -5,7 +5,7 @@
 //! Corners are numbered in Gmsh's hex order (0 (−,−,−), 1 (+,−,−), 2 (+,+,−), 3 (−,+,−), then
 //! the same at z = +½); faces in the tables' cap order `2·axis + side`.
 
-use super::lattice::{Lattice, Weights};
+use super::lattice::{Lattice, Weights, grid_representative};
 use super::local::{LocalBuilder, LocalMesh, Samples, inside};
 use crate::contour::table::{HI_SLOT, tables};
 pub use crate::scaffold::HEX_CORNERS;
@@ -61,23 +61,11 @@ impl Lattice for CubeLattice {
     }
 
     fn representative(&self, p: u32) -> u32 {
-        let m = self.n - 1;
-        let mut c = self.coords(p).map(|c| c.min(m - c));
-        c.sort_unstable();
-        self.index(c)
+        self.index(grid_representative(self.coords(p), self.n - 1))
     }
 
     fn weights(&self, p: u32) -> Weights {
-        let m = self.n - 1;
-        let c = self.coords(p);
-        let mut out = Weights::default();
-        for (corner, at) in HEX_CORNERS.iter().enumerate() {
-            let w = (0..3).fold(1u32, |w, a| w * if at[a] == 0 { m - c[a] } else { c[a] });
-            if w > 0 {
-                out.push(corner as u8, w);
-            }
-        }
-        out
+        Weights::grid(self.coords(p), self.n - 1, &HEX_CORNERS)
     }
 
     fn face_masks(&self) -> &[u8] {

@@ -59,4 +59,38 @@ impl Weights {
     pub fn mask(&self) -> u8 {
         self.as_slice().iter().fold(0, |m, &(c, _)| m | 1 << c)
     }
+
+    /// The weights of a simplex lattice point with barycentric integers `a` (one per corner):
+    /// the nonzero ones.
+    pub fn barycentric(a: &[u32]) -> Weights {
+        let mut out = Weights::default();
+        for (corner, &w) in a.iter().enumerate() {
+            if w > 0 {
+                out.push(corner as u8, w);
+            }
+        }
+        out
+    }
+
+    /// The weights of grid point `c` (each coordinate in `0..=m`) on a square's or cube's
+    /// `corners` (0 or 1 per axis): per corner, the product over the axes of `m − c` (corner
+    /// at 0) or `c` (corner at 1); corners of weight 0 are left out.
+    pub fn grid<const D: usize>(c: [u32; D], m: u32, corners: &[[u32; D]]) -> Weights {
+        let mut out = Weights::default();
+        for (corner, at) in corners.iter().enumerate() {
+            let w = (0..D).fold(1u32, |w, a| w * if at[a] == 0 { m - c[a] } else { c[a] });
+            if w > 0 {
+                out.push(corner as u8, w);
+            }
+        }
+        out
+    }
+}
+
+/// The orbit representative of grid point `c` (each coordinate in `0..=m`) under a square's
+/// or cube's symmetries: each coordinate folded to `min(c, m − c)`, then sorted.
+pub fn grid_representative<const D: usize>(c: [u32; D], m: u32) -> [u32; D] {
+    let mut c = c.map(|c| c.min(m - c));
+    c.sort_unstable();
+    c
 }

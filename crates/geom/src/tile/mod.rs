@@ -53,6 +53,7 @@ mod weld;
 
 use rayon::prelude::*;
 
+use crate::contour2d::Element2;
 use crate::element::Element3;
 use crate::field::{ScalarField, Solid};
 use crate::mesh::{Mesh, MeshChunk};
@@ -77,10 +78,11 @@ pub trait ElementMap: Sync {
 }
 
 /// The elements to tile: their shape, and for each element the global node ids of its corners
-/// in the reference element's corner order (hex: Gmsh's; tetrahedron: `p0..p3` of docs/method.md
-/// §Reference elements).
-pub struct Elements<'a> {
-    pub shape: Element3,
+/// in the reference element's corner order (hex: Gmsh's; tetrahedron: `p0..p3` of
+/// docs/method.md §Reference elements; 2D ([`Elements2`]): Gmsh's, reference points
+/// `[ξ₁, ξ₂, 0]`).
+pub struct Elements<'a, S = Element3> {
+    pub shape: S,
     pub corners: &'a [u32],
     /// Every node of each element (its corners first, as in `corners`): nodal values are
     /// interpolated by the shape functions of `nodes.kind` through all of them.
@@ -88,12 +90,32 @@ pub struct Elements<'a> {
     pub map: &'a dyn ElementMap,
 }
 
-impl Elements<'_> {
-    fn corner_count(&self) -> usize {
-        match self.shape {
+/// A reference element's shape, as [`Elements`] need it.
+pub trait ElementShape: Copy + Sync {
+    fn corner_count(self) -> usize;
+}
+
+impl ElementShape for Element3 {
+    fn corner_count(self) -> usize {
+        match self {
             Element3::Cube => 8,
             Element3::Tetrahedron => 4,
         }
+    }
+}
+
+impl ElementShape for Element2 {
+    fn corner_count(self) -> usize {
+        match self {
+            Element2::Square => 4,
+            Element2::Triangle => 3,
+        }
+    }
+}
+
+impl<S: ElementShape> Elements<'_, S> {
+    fn corner_count(&self) -> usize {
+        self.shape.corner_count()
     }
 
     fn count(&self) -> usize {
@@ -272,8 +294,7 @@ fn tile_with(
     skin: Option<&Skin>,
     resolution: usize,
 ) -> Result<(Mesh, TileStats), TileError> {
-    check_elements(elements, solid, resolution)?;
-    let lattice = lattice_of(elements.shape, resolution);
+    let lattice = checked_lattice(elements, solid, resolution)?;
     tile_on(elements, elements.nodes, lattice.as_ref(), solid, skin)
 }
 
@@ -286,8 +307,7 @@ fn stream_with(
     chunk_elements: usize,
     sink: &mut ChunkSink,
 ) -> Result<TileStats, TileError> {
-    check_elements(elements, solid, resolution)?;
-    let lattice = lattice_of(elements.shape, resolution);
+    let lattice = checked_lattice(elements, solid, resolution)?;
     let nodes = elements.nodes;
     stream_on(
         elements,
@@ -300,13 +320,15 @@ fn stream_with(
     )
 }
 
-/// The elements' node lists against their shape, then [`check_input`].
-fn check_elements(
-    elements: &Elements,
+/// The elements' node lists against their shape, which for their node kind is `reference`,
+/// then [`check_input`].
+fn check_elements<S: ElementShape + PartialEq + std::fmt::Debug>(
+    elements: &Elements<S>,
+    reference: Option<S>,
     solid: &TiledSolid,
     resolution: usize,
 ) -> Result<(), TileError> {
-    if reference_element(elements.nodes.kind) != Some(elements.shape) {
+    if reference != Some(elements.shape) {
         return Err(TileError::Nodes(format!(
             "{} nodes on {:?} elements",
             elements.nodes.kind.name(),
@@ -320,6 +342,17 @@ fn check_elements(
         solid,
         resolution,
     )
+}
+
+/// The 3D elements checked ([`check_elements`]), and their lattice at `resolution`.
+fn checked_lattice(
+    elements: &Elements,
+    solid: &TiledSolid,
+    resolution: usize,
+) -> Result<Box<dyn Lattice>, TileError> {
+    let reference = reference_element(elements.nodes.kind);
+    check_elements(elements, reference, solid, resolution)?;
+    Ok(lattice_of(elements.shape, resolution))
 }
 
 fn lattice_of(shape: Element3, resolution: usize) -> Box<dyn Lattice> {
@@ -454,8 +487,20 @@ fn stream_on(
 }
 
 /// Makes chunks `0..chunks` in order with `make`, handing each to `sink` while the next one
-/// is made (`rayon::join`); the first error stops both.
+/// is made (`rayon::join`); the first error stops both. The arrays the sink recycled
+/// ([`MeshChunk::recycle`]) are dropped at the end.
 fn pipeline(
+    chunks: usize,
+    make: impl FnMut(usize) -> Result<MeshChunk, TileError> + Send,
+    sink: &mut ChunkSink,
+) -> Result<(), TileError> {
+    let done = make_chunks(chunks, make, sink);
+    crate::mesh::drop_spare_arrays();
+    done
+}
+
+/// [`pipeline`]'s loop.
+fn make_chunks(
     chunks: usize,
     mut make: impl FnMut(usize) -> Result<MeshChunk, TileError> + Send,
     sink: &mut ChunkSink,

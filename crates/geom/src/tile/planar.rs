@@ -40,46 +40,16 @@ use super::lattice::Lattice;
 use super::scaffold::check_f32_room;
 use super::square::SquareLattice;
 use super::triangle::TriangleLattice;
-use super::weld::Corners;
-use super::{ElementMap, Nodes, TileError, TileStats, TiledSolid, check_input, tile_on};
+use super::{
+    ElementMap, Elements, Nodes, TileError, TileStats, TiledSolid, check_elements, tile_on,
+};
 use crate::contour2d::{Element2, boundary_loops};
 use crate::mesh::Mesh;
 use crate::scaffold::{ElementKind, Scaffold};
 
 /// 2D elements to tile: their shape and, per element, the global node ids of its corners in
 /// Gmsh's corner order; reference points are `[ξ₁, ξ₂, 0]`.
-pub struct Elements2<'a> {
-    pub shape: Element2,
-    pub corners: &'a [u32],
-    /// Every node of each element (its corners first, as in `corners`): nodal values are
-    /// interpolated by the shape functions of `nodes.kind` through all of them.
-    pub nodes: Nodes<'a>,
-    pub map: &'a dyn ElementMap,
-}
-
-impl Elements2<'_> {
-    fn corner_count(&self) -> usize {
-        match self.shape {
-            Element2::Square => 4,
-            Element2::Triangle => 3,
-        }
-    }
-}
-
-impl Corners for Elements2<'_> {
-    fn count(&self) -> usize {
-        self.corners.len() / self.corner_count()
-    }
-
-    fn element(&self, e: usize) -> &[u32] {
-        let n = self.corner_count();
-        &self.corners[e * n..(e + 1) * n]
-    }
-
-    fn place(&self, e: usize, xi: [f64; 3]) -> [f64; 3] {
-        self.map.map(e, xi)
-    }
-}
+pub type Elements2<'a> = Elements<'a, Element2>;
 
 /// Tiles `solid` into every 2D element: the welded region, triangles counter-clockwise in
 /// reference coordinates.
@@ -88,17 +58,9 @@ pub fn tile_planar(
     solid: &TiledSolid,
     resolution: usize,
 ) -> Result<(Mesh, TileStats), TileError> {
-    if surface_element(elements.nodes.kind) != Some(elements.shape) {
-        return Err(TileError::Nodes(format!(
-            "{} nodes on {:?} elements",
-            elements.nodes.kind.name(),
-            elements.shape
-        )));
-    }
-    check_input(
-        elements.corners,
-        elements.corner_count(),
-        &elements.nodes,
+    check_elements(
+        elements,
+        surface_element(elements.nodes.kind),
         solid,
         resolution,
     )?;

@@ -16,7 +16,7 @@
 //! (crossings) or lattice points (inside corners); there are no caps (a region is closed by
 //! its boundary loops, not by faces).
 
-use super::lattice::{Lattice, Weights};
+use super::lattice::{Lattice, Weights, grid_representative};
 use super::local::{LocalBuilder, LocalMesh, Samples, inside};
 use crate::contour::table::tables;
 
@@ -69,23 +69,11 @@ impl Lattice for SquareLattice {
     }
 
     fn representative(&self, p: u32) -> u32 {
-        let m = self.n - 1;
-        let mut c = self.coords(p).map(|c| c.min(m - c));
-        c.sort_unstable();
-        self.index(c)
+        self.index(grid_representative(self.coords(p), self.n - 1))
     }
 
     fn weights(&self, p: u32) -> Weights {
-        let m = self.n - 1;
-        let c = self.coords(p);
-        let mut out = Weights::default();
-        for (corner, at) in SQUARE_CORNERS.iter().enumerate() {
-            let w = (0..2).fold(1u32, |w, a| w * if at[a] == 0 { m - c[a] } else { c[a] });
-            if w > 0 {
-                out.push(corner as u8, w);
-            }
-        }
-        out
+        Weights::grid(self.coords(p), self.n - 1, &SQUARE_CORNERS)
     }
 
     fn face_masks(&self) -> &[u8] {

@@ -119,13 +119,7 @@ impl Lattice for TriangleLattice {
     }
 
     fn weights(&self, p: u32) -> Weights {
-        let mut out = Weights::default();
-        for (corner, &w) in self.barycentric(p).iter().enumerate() {
-            if w > 0 {
-                out.push(corner as u8, w);
-            }
-        }
-        out
+        Weights::barycentric(&self.barycentric(p))
     }
 
     fn face_masks(&self) -> &[u8] {

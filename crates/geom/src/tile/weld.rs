@@ -17,7 +17,7 @@ use std::collections::HashMap;
 use super::face_plan::{FacePlan, NO_FACE};
 use super::lattice::{Lattice, Weights};
 use super::local::{LocalMesh, LocalVertex, POINT};
-use super::{Elements, TileError, TileStats};
+use super::{ElementShape, Elements, TileError, TileStats};
 
 /// What the weld needs of a set of elements, of any dimension: their count, each one's
 /// global corner nodes (in its lattice's corner order) and where a reference point goes.
@@ -28,7 +28,7 @@ pub trait Corners: Sync {
     fn place(&self, e: usize, xi: [f64; 3]) -> [f64; 3];
 }
 
-impl Corners for Elements<'_> {
+impl<S: ElementShape> Corners for Elements<'_, S> {
     fn count(&self) -> usize {
         Elements::count(self)
     }
@@ -41,7 +41,7 @@ impl Corners for Elements<'_> {
         self.map.map(e, xi)
     }
 }
-use crate::mesh::MeshChunk;
+use crate::mesh::{MeshChunk, spare_arrays};
 
 /// A local vertex on the element boundary: the weights of its lattice ends, and the faces
 /// whose caps alone use it (0 when surface triangles use it).
@@ -269,7 +269,7 @@ fn vertex_name(corners: &[u32], v: &SharedVertex) -> u128 {
 /// bucket boundaries into one range per thread, and each thread reads every name but places
 /// only those of its own range. (A serial scatter was a quarter of the weld's serial time.)
 /// The result is the sorted order whatever the thread count.
-fn sort_names(names: &mut Vec<(u128, u32, u32)>) {
+fn sort_names(names: &mut Vec<(u128, u32, u32)>, spare: &mut Vec<(u128, u32, u32)>) {
     if names.len() < 1 << 12 {
         names.sort_unstable();
         return;
@@ -309,9 +309,11 @@ fn sort_names(names: &mut Vec<(u128, u32, u32)>) {
         }
     }
     cuts.push(buckets);
-    let mut sorted = vec![(0u128, 0u32, 0u32); names.len()];
+    spare.clear();
+    spare.resize(names.len(), (0, 0, 0));
+    let sorted = spare;
     let lengths = cuts.windows(2).map(|w| start[w[1]] - start[w[0]]);
-    let parts: Vec<_> = split_by(&mut sorted, lengths)
+    let parts: Vec<_> = split_by(sorted, lengths)
         .into_iter()
         .zip(cuts.windows(2).map(|w| w[0]..w[1]))
         .collect();
@@ -334,7 +336,7 @@ fn sort_names(names: &mut Vec<(u128, u32, u32)>) {
             at += len;
         }
     });
-    *names = sorted;
+    std::mem::swap(names, sorted);
 }
 
 /// MurmurHash3's 64-bit finalizer: every input bit flips each output bit with probability ½.
@@ -548,6 +550,8 @@ pub struct Welder<'a> {
     /// Slots that took another element's vertex, welded by structure and by name.
     #[cfg_attr(not(test), allow(dead_code))]
     borrowed_by: [u64; 2],
+    /// Buffers of the chunk being welded, reused by the next.
+    scratch: Scratch,
 }
 
 impl<'a> Welder<'a> {
@@ -571,6 +575,7 @@ impl<'a> Welder<'a> {
             next_id: 0,
             uniform: None,
             borrowed_by: [0; 2],
+            scratch: Scratch::default(),
         })
     }
 
@@ -611,26 +616,100 @@ impl<'a> Welder<'a> {
     /// Welds the next `count` elements (from where the previous chunk ended), whose local
     /// meshes are `locals`, into the next chunk of the mesh.
     pub fn chunk(&mut self, count: usize, locals: Locals) -> Result<MeshChunk, TileError> {
-        let (lattice, elements) = (self.lattice, self.elements);
         let start = self.next_element;
-        let end = (start + count).min(elements.count());
-        let n = end - start;
-        if let Locals::Uniform(local) = &locals
-            && self.uniform.is_none()
-        {
-            let classified = Classified::new(lattice, local);
-            let plan = (lattice.face_masks().len() <= MAX_FACES).then(|| {
-                let ends: Vec<_> = classified
-                    .shared
-                    .iter()
-                    .map(|v| (v.a, v.b, v.upper))
-                    .collect();
-                let surface: Vec<bool> = classified.shared.iter().map(|v| v.caps == 0).collect();
-                FacePlan::new(&ends, &surface, lattice.face_masks())
-            });
-            self.uniform = Some((classified, plan));
+        let end = (start + count).min(self.elements.count());
+        if let Locals::Uniform(local) = &locals {
+            self.classify_uniform(local);
         }
-        let (classes, plan) = match &locals {
+        let mut scratch = std::mem::take(&mut self.scratch);
+        let welded = self.weld(start, end, &locals, &mut scratch);
+        self.scratch = scratch;
+        let welded = welded?;
+        let open = self.advance(end, welded.fresh);
+        self.borrowed_by[0] += welded.paired;
+        self.borrowed_by[1] += welded.named_borrowers;
+        self.next_element = end;
+        self.next_id = welded.first + welded.vertices.len() as u64;
+        Ok(MeshChunk {
+            first_vertex: welded.first as u32,
+            vertices: welded.vertices,
+            triangles: welded.triangles,
+            borrowed: welded.borrowed,
+            open,
+        })
+    }
+
+    /// Classifies a uniform cell's local mesh and plans its structural weld, once.
+    fn classify_uniform(&mut self, local: &LocalMesh) {
+        if self.uniform.is_some() {
+            return;
+        }
+        let lattice = self.lattice;
+        let classified = Classified::new(lattice, local);
+        let plan = (lattice.face_masks().len() <= MAX_FACES).then(|| {
+            let ends: Vec<_> = classified
+                .shared
+                .iter()
+                .map(|v| (v.a, v.b, v.upper))
+                .collect();
+            let surface: Vec<bool> = classified.shared.iter().map(|v| v.caps == 0).collect();
+            FacePlan::new(&ends, &surface, lattice.face_masks())
+        });
+        self.uniform = Some((classified, plan));
+    }
+
+    /// Welds elements `start..end` without changing the welder: their vertices, triangles
+    /// and borrowed vertices, and the vertices they leave open.
+    fn weld(
+        &self,
+        start: usize,
+        end: usize,
+        locals: &Locals,
+        scratch: &mut Scratch,
+    ) -> Result<Welded, TileError> {
+        let span = self.span(start, end, locals);
+        let n = end - start;
+        scratch.slot_base.clear();
+        scratch.slot_base.push(0usize);
+        for i in 0..n {
+            let next = scratch.slot_base[i] + span.class(i).shared.len();
+            scratch.slot_base.push(next);
+        }
+        let slots = scratch.slot_base[n];
+        scratch.role.clear();
+        scratch.role.resize(slots, Role::Named);
+        scratch.link.clear();
+        scratch.link.resize(slots, 0);
+        let structural = self.weld_by_structure(&span, scratch);
+        let (mut borrowed, named_borrowers) = self.weld_by_name(&span, scratch);
+        for welds in &structural {
+            borrowed.extend_from_slice(&welds.borrowed);
+        }
+        borrowed.sort_unstable_by_key(|&(id, _)| id);
+        let first = self.next_id;
+        let (mut vertices, mut triangles) = spare_arrays();
+        self.place_vertices(&span, first, scratch, &mut vertices)?;
+        span.triangles(locals, scratch, &mut triangles);
+        let fresh = self
+            .last
+            .as_ref()
+            .map(|last| self.fresh_open(&span, last, &structural, scratch, &vertices, first));
+        Ok(Welded {
+            first,
+            vertices,
+            triangles,
+            borrowed,
+            fresh,
+            paired: structural.iter().map(|w| w.paired).sum(),
+            named_borrowers,
+        })
+    }
+
+    /// Elements `start..end` with their classified local meshes (`locals`, or the uniform
+    /// cell's, classified already).
+    fn span<'c>(&'c self, start: usize, end: usize, locals: &Locals) -> Span<'c> {
+        let n = end - start;
+        let (classes, plan) = match locals {
             Locals::Uniform(_) => {
                 let (classified, plan) = self.uniform.as_ref().expect("classified");
                 (Classes::Uniform(classified), plan.as_ref())
@@ -639,125 +718,138 @@ impl<'a> Welder<'a> {
                 Classes::Each(
                     all[..n]
                         .par_iter()
-                        .map(|l| Classified::new(lattice, l))
+                        .map(|l| Classified::new(self.lattice, l))
                         .collect(),
                 ),
                 None,
             ),
         };
-        let class = |i: usize| classes.get(i);
-        let boundary = &self.faces.boundary[start..end];
-        let used = |i: usize, s: &SharedVertex| s.caps == 0 || s.caps & boundary[i] != 0;
-        // Slots of the chunk's i-th element's shared vertices: slot_base[i]..slot_base[i + 1].
-        let mut slot_base = Vec::with_capacity(n + 1);
-        slot_base.push(0usize);
-        for i in 0..n {
-            slot_base.push(slot_base[i] + class(i).shared.len());
+        Span {
+            start,
+            end,
+            classes,
+            plan,
+            boundary: &self.faces.boundary[start..end],
         }
-        let slots = slot_base[n];
-        let slot_lengths = || (0..n).map(|i| class(i).shared.len());
+    }
 
-        // Per slot: its role, and the owner's slot (Borrower) or the vertex id (Earlier).
-        // Vertices inside a face the plan pairs are welded by structure here, element by
-        // element; the rest are left Named for the name weld below.
-        let mut role = vec![Role::Named; slots];
-        let mut link = vec![0u32; slots];
-        let face_frontier = &self.face_frontier;
-        let this = &*self;
-        let per_element: Vec<_> = split_by(&mut role, slot_lengths())
+    /// Per slot: its role, and the owner's slot (Borrower) or the vertex id (Earlier).
+    /// Vertices inside a face the plan pairs are welded by structure here, element by
+    /// element; the rest are left Named for [`Self::weld_by_name`]. Returns what each element
+    /// welded.
+    fn weld_by_structure(&self, span: &Span, scratch: &mut Scratch) -> Vec<FaceWelds> {
+        let slot_lengths = || (0..span.len()).map(|i| span.class(i).shared.len());
+        let per_element: Vec<_> = split_by(&mut scratch.role, slot_lengths())
             .into_iter()
-            .zip(split_by(&mut link, slot_lengths()))
+            .zip(split_by(&mut scratch.link, slot_lengths()))
             .collect();
-        let structural: Vec<FaceWelds> = per_element
+        let slot_base = &scratch.slot_base;
+        per_element
             .into_par_iter()
             .enumerate()
-            .map(|(i, (roles, links))| {
-                let e = start + i;
-                let mut welds = FaceWelds::default();
-                let views = plan.map(|plan| (plan, this.face_views(plan, e, boundary[i])));
-                for (s, v) in class(i).shared.iter().enumerate() {
-                    if !used(i, v) {
-                        roles[s] = Role::Unused;
-                        continue;
-                    }
-                    let Some((plan, views)) = &views else {
-                        continue;
-                    };
-                    let f = plan.face_of(s);
-                    if f == NO_FACE {
-                        continue;
-                    }
-                    match views[f as usize] {
-                        FaceView::Named => {}
-                        FaceView::Alone => roles[s] = Role::Owner,
-                        FaceView::Paired { neighbour, .. } if neighbour as usize > e => {
-                            roles[s] = Role::Owner;
-                            if neighbour as usize >= end {
-                                welds.opens.push((s as u32, neighbour));
-                            }
-                        }
-                        FaceView::Paired {
-                            neighbour,
-                            face,
-                            code,
-                            other,
-                        } => {
-                            let (code, other) = (code as usize, other as usize);
-                            let theirs = plan.partner(s, f as usize, code, face as usize, other);
-                            let owner = neighbour as usize;
-                            welds.paired += 1;
-                            if owner >= start {
-                                roles[s] = Role::Borrower;
-                                links[s] = (slot_base[owner - start] + theirs as usize) as u32;
-                            } else if let Some(o) = face_frontier.get(&face_key(owner, theirs)) {
-                                roles[s] = Role::Earlier;
-                                links[s] = o.id;
-                                welds.borrowed.push((o.id, o.position));
-                            } else {
-                                // Not reachable: the owner left it open for this element.
-                                debug_assert!(false, "face vertex of {owner} not open");
-                                roles[s] = Role::Owner;
-                            }
-                        }
+            .map(|(i, (roles, links))| self.weld_faces(span, slot_base, i, roles, links))
+            .collect()
+    }
+
+    /// [`Self::weld_by_structure`] for the chunk's `i`-th element, whose slots' roles and
+    /// links are `roles` and `links`.
+    fn weld_faces(
+        &self,
+        span: &Span,
+        slot_base: &[usize],
+        i: usize,
+        roles: &mut [Role],
+        links: &mut [u32],
+    ) -> FaceWelds {
+        let e = span.start + i;
+        let mut welds = FaceWelds::default();
+        let views = span
+            .plan
+            .map(|plan| (plan, self.face_views(plan, e, span.boundary[i])));
+        for (s, v) in span.class(i).shared.iter().enumerate() {
+            if !span.used(i, v) {
+                roles[s] = Role::Unused;
+                continue;
+            }
+            let Some((plan, views)) = &views else {
+                continue;
+            };
+            let f = plan.face_of(s);
+            if f == NO_FACE {
+                continue;
+            }
+            match views[f as usize] {
+                FaceView::Named => {}
+                FaceView::Alone => roles[s] = Role::Owner,
+                FaceView::Paired { neighbour, .. } if neighbour as usize > e => {
+                    roles[s] = Role::Owner;
+                    if neighbour as usize >= span.end {
+                        welds.opens.push((s as u32, neighbour));
                     }
                 }
-                welds
-            })
-            .collect();
+                FaceView::Paired {
+                    neighbour,
+                    face,
+                    code,
+                    other,
+                } => {
+                    let (code, other) = (code as usize, other as usize);
+                    let theirs = plan.partner(s, f as usize, code, face as usize, other);
+                    let owner = neighbour as usize;
+                    welds.paired += 1;
+                    if owner >= span.start {
+                        roles[s] = Role::Borrower;
+                        links[s] = (slot_base[owner - span.start] + theirs as usize) as u32;
+                    } else if let Some(o) = self.face_frontier.get(&face_key(owner, theirs)) {
+                        roles[s] = Role::Earlier;
+                        links[s] = o.id;
+                        welds.borrowed.push((o.id, o.position));
+                    } else {
+                        // Not reachable: the owner left it open for this element.
+                        debug_assert!(false, "face vertex of {owner} not open");
+                        roles[s] = Role::Owner;
+                    }
+                }
+            }
+        }
+        welds
+    }
 
-        // Name every other shared vertex every element uses; equal names are one vertex,
-        // owned by the lowest element — of an earlier chunk when the frontier has it.
-        let role_of = &role;
-        let mut names: Vec<(u128, u32, u32)> = (0..n)
-            .into_par_iter()
-            .flat_map_iter(|i| {
-                let corners = elements.element(start + i);
-                let roles = &role_of[slot_base[i]..slot_base[i + 1]];
-                class(i)
-                    .shared
-                    .iter()
-                    .enumerate()
-                    .filter(move |&(s, _)| roles[s] == Role::Named)
-                    .map(move |(s, v)| (vertex_name(corners, v), i as u32, s as u32))
-            })
-            .collect();
-        sort_names(&mut names);
+    /// Names every other shared vertex every element uses; equal names are one vertex,
+    /// owned by the lowest element — of an earlier chunk when the frontier has it. Sets the
+    /// roles and links of the named slots and leaves the new groups (name and owner) in
+    /// `scratch.groups`; returns the earlier chunks' vertices borrowed by name and how many
+    /// slots took another's vertex.
+    fn weld_by_name(&self, span: &Span, scratch: &mut Scratch) -> (Vec<(u32, [f32; 3])>, u64) {
+        self.collect_names(span, scratch);
+        let Scratch {
+            slot_base,
+            role,
+            link,
+            names,
+            starts,
+            earlier,
+            groups,
+            ..
+        } = scratch;
         // Runs of equal names, and whether an earlier chunk has each: found in parallel, as
         // these can be millions of lookups a chunk.
-        let starts: Vec<usize> = (0..names.len())
-            .into_par_iter()
-            .filter(|&r| r == 0 || names[r].0 != names[r - 1].0)
-            .collect();
+        starts.clear();
+        starts.par_extend(
+            (0..names.len())
+                .into_par_iter()
+                .filter(|&r| r == 0 || names[r].0 != names[r - 1].0),
+        );
         let frontier = &self.frontier;
-        let earlier: Vec<Option<(u32, [f32; 3])>> = starts
+        starts
             .par_iter()
             .map(|&r| match frontier.is_empty() {
                 true => None,
                 false => frontier.get(&names[r].0).map(|o| (o.id, o.position)),
             })
-            .collect();
-        // The new groups (name and owner), for the frontier; every run's slots get their role.
-        let mut groups: Vec<(u128, u32, u32)> = Vec::new();
+            .collect_into_vec(earlier);
+        // The new groups, for the frontier; every run's slots get their role.
+        groups.clear();
         let mut borrowed: Vec<(u32, [f32; 3])> = Vec::new();
         for (k, &r) in starts.iter().enumerate() {
             let run_end = starts.get(k + 1).copied().unwrap_or(names.len());
@@ -776,48 +868,95 @@ impl<'a> Welder<'a> {
                 };
             }
         }
-        self.borrowed_by[1] += (names.len() - groups.len()) as u64;
-        for welds in &structural {
-            borrowed.extend_from_slice(&welds.borrowed);
-            self.borrowed_by[0] += welds.paired;
-        }
-        drop(names);
-        borrowed.sort_unstable_by_key(|&(id, _)| id);
+        (borrowed, (names.len() - groups.len()) as u64)
+    }
 
-        // Vertex ids: element by element, its interior vertices and the shared ones it owns, in
-        // local order.
-        let owned: Vec<usize> = (0..n)
+    /// The `(name, element, slot)` of every slot still Named, element by element in slot
+    /// order, sorted by name into `scratch.names`.
+    fn collect_names(&self, span: &Span, scratch: &mut Scratch) {
+        let Scratch {
+            slot_base,
+            role,
+            named,
+            names,
+            sorted,
+            ..
+        } = scratch;
+        let roles = |i: usize| &role[slot_base[i]..slot_base[i + 1]];
+        (0..span.len())
+            .into_par_iter()
+            .map(|i| roles(i).iter().filter(|&&r| r == Role::Named).count())
+            .collect_into_vec(named);
+        names.clear();
+        names.resize(named.iter().sum(), (0, 0, 0));
+        split_by(names, named.iter().copied())
+            .into_par_iter()
+            .enumerate()
+            .for_each(|(i, out)| {
+                let corners = self.elements.element(span.start + i);
+                let roles = roles(i);
+                let items = span.class(i).shared.iter().enumerate();
+                let items = items
+                    .filter(|&(s, _)| roles[s] == Role::Named)
+                    .map(|(s, v)| (vertex_name(corners, v), i as u32, s as u32));
+                for (slot, item) in out.iter_mut().zip(items) {
+                    *slot = item;
+                }
+            });
+        sort_names(names, sorted);
+    }
+
+    /// Vertex ids, element by element: its interior vertices and the shared ones it owns, in
+    /// local order, from `first`. Fills `scratch.base` (each element's first id) and
+    /// `scratch.slot_id` (the id each owner slot gave its vertex), and `vertices` (empty) with
+    /// their positions.
+    fn place_vertices(
+        &self,
+        span: &Span,
+        first: u64,
+        scratch: &mut Scratch,
+        vertices: &mut Vec<[f32; 3]>,
+    ) -> Result<(), TileError> {
+        let n = span.len();
+        let Scratch {
+            slot_base,
+            role,
+            owned,
+            base,
+            slot_id,
+            ..
+        } = scratch;
+        (0..n)
             .into_par_iter()
             .map(|i| {
-                let c = class(i);
+                let c = span.class(i);
                 let interior = c.shared_index.len() - c.shared.len();
                 let roles = &role[slot_base[i]..slot_base[i + 1]];
                 interior + roles.iter().filter(|&&r| r == Role::Owner).count()
             })
-            .collect();
-        let first = self.next_id;
-        let mut base = Vec::with_capacity(n + 1);
+            .collect_into_vec(owned);
+        base.clear();
         base.push(first);
-        for &c in &owned {
+        for &c in owned.iter() {
             base.push(base[base.len() - 1] + c as u64);
         }
         if base[n] > u64::from(u32::MAX) {
             return Err(TileError::TooManyVertices(base[n]));
         }
-        // Per slot: the id its owner gave it (owner slots only).
-        let mut slot_id = vec![0u32; slots];
-        // Written in place, element by element in parallel: each element's vertices and
-        // triangles have a known range of the chunk.
-        let mut vertices = vec![[0.0f32; 3]; (base[n] - first) as usize];
-        let vertex_ranges = split_by(&mut vertices, owned.iter().copied());
-        let id_ranges = split_by(&mut slot_id, slot_lengths());
-        let role = &role;
+        slot_id.clear();
+        slot_id.resize(slot_base[n], 0);
+        // Written in place, element by element in parallel: each element's vertices have a
+        // known range of the chunk.
+        vertices.resize((base[n] - first) as usize, [0.0; 3]);
+        let vertex_ranges = split_by(vertices, owned.iter().copied());
+        let id_ranges = split_by(slot_id, (0..n).map(|i| span.class(i).shared.len()));
+        let (role, slot_base, base) = (&*role, &*slot_base, &*base);
         vertex_ranges
             .into_par_iter()
             .zip(id_ranges)
             .enumerate()
             .for_each(|(i, (out, ids))| {
-                let c = class(i);
+                let c = span.class(i);
                 let mut next = base[i] as u32;
                 let mut out = out.iter_mut();
                 for (v, xi) in c.xi.iter().enumerate() {
@@ -830,12 +969,125 @@ impl<'a> Welder<'a> {
                     }
                     next += 1;
                     if let Some(v) = out.next() {
-                        *v = elements.place(start + i, *xi).map(|c| c as f32);
+                        *v = self.elements.place(span.start + i, *xi).map(|c| c as f32);
                     }
                 }
             });
+        Ok(())
+    }
 
-        let triangle_counts: Vec<usize> = (0..n)
+    /// The vertices of this chunk that later chunks may still use: the new shared ones whose
+    /// node, edge or face reaches past it, by name and by face key.
+    fn fresh_open(
+        &self,
+        span: &Span,
+        last: &LastUsers,
+        structural: &[FaceWelds],
+        scratch: &Scratch,
+        vertices: &[[f32; 3]],
+        first: u64,
+    ) -> FreshOpen {
+        let face_masks = self.lattice.face_masks();
+        // The last element each new named vertex reaches: a lookup per vertex, in parallel;
+        // the few that stay open are then kept in order.
+        let until: Vec<u32> = scratch
+            .groups
+            .par_iter()
+            .map(|&(_, i, s)| {
+                let e = span.start + i as usize;
+                let v = &span.class(i as usize).shared[s as usize];
+                let mask = v.a.mask() | v.b.map_or(0, |b| b.mask());
+                last.of(e, self.elements.element(e), mask, &self.faces, face_masks)
+            })
+            .collect();
+        let owner_id = |i: usize, s: u32| scratch.slot_id[scratch.slot_base[i] + s as usize];
+        let open_vertex = |id: u32, last: u32| OpenVertex {
+            id,
+            position: vertices[(u64::from(id) - first) as usize],
+            last,
+        };
+        let mut fresh = FreshOpen::default();
+        for (g, &(name, i, s)) in scratch.groups.iter().enumerate() {
+            if until[g] as usize >= span.end {
+                let id = owner_id(i as usize, s);
+                fresh.named.push((name, open_vertex(id, until[g])));
+            }
+        }
+        for (i, welds) in structural.iter().enumerate() {
+            for &(s, last) in &welds.opens {
+                let id = owner_id(i, s);
+                let key = face_key(span.start + i, s);
+                fresh.faces.push((key, open_vertex(id, last)));
+            }
+        }
+        fresh
+    }
+
+    /// Takes a chunk ending at element `end` that leaves `fresh` open (`None`: the welder
+    /// keeps nothing open); returns the ids open after it, in order.
+    fn advance(&mut self, end: usize, fresh: Option<FreshOpen>) -> Vec<u32> {
+        let Some(fresh) = fresh else {
+            return Vec::new();
+        };
+        let mut ids = Vec::with_capacity(fresh.named.len() + fresh.faces.len());
+        for (name, vertex) in fresh.named {
+            ids.push((vertex.id, vertex.last));
+            self.frontier.insert(name, vertex);
+        }
+        for (key, vertex) in fresh.faces {
+            ids.push((vertex.id, vertex.last));
+            self.face_frontier.insert(key, vertex);
+        }
+        self.frontier.retain(|_, v| v.last as usize >= end);
+        self.face_frontier.retain(|_, v| v.last as usize >= end);
+        // Earlier ids are all below this chunk's first, so appending the sorted new ones
+        // keeps the list sorted.
+        self.open.retain(|&(_, last)| last as usize >= end);
+        ids.sort_unstable();
+        self.open.extend(ids);
+        self.open.iter().map(|&(id, _)| id).collect()
+    }
+}
+
+/// A chunk's elements as the weld sees them: elements `start..end`, their classified local
+/// meshes, the uniform cell's structural plan and their boundary faces.
+struct Span<'c> {
+    start: usize,
+    end: usize,
+    classes: Classes<'c>,
+    plan: Option<&'c FacePlan>,
+    boundary: &'c [u8],
+}
+
+impl Span<'_> {
+    fn len(&self) -> usize {
+        self.end - self.start
+    }
+
+    fn class(&self, i: usize) -> &Classified {
+        self.classes.get(i)
+    }
+
+    /// Whether the chunk's `i`-th element uses shared vertex `s`: surface triangles do, or a
+    /// cap on one of its boundary faces.
+    fn used(&self, i: usize, s: &SharedVertex) -> bool {
+        s.caps == 0 || s.caps & self.boundary[i] != 0
+    }
+
+    /// The triangles of the chunk's elements into `triangles` (empty), element by element
+    /// (surface, then the caps of boundary faces), in the ids [`Welder::place_vertices`] gave.
+    fn triangles(&self, locals: &Locals, scratch: &mut Scratch, triangles: &mut Vec<[u32; 3]>) {
+        let Scratch {
+            slot_base,
+            role,
+            link,
+            base,
+            slot_id,
+            triangle_counts,
+            ..
+        } = scratch;
+        let boundary = self.boundary;
+        (0..self.len())
             .into_par_iter()
             .map(|i| {
                 let local = locals.get(i);
@@ -846,14 +1098,15 @@ impl<'a> Welder<'a> {
                         .map(|(_, cap)| cap.len())
                         .sum::<usize>()
             })
-            .collect();
-        let mut triangles = vec![[0u32; 3]; triangle_counts.iter().sum()];
-        let triangle_ranges = split_by(&mut triangles, triangle_counts.iter().copied());
-        let (link, slot_id) = (&link, &slot_id);
+            .collect_into_vec(triangle_counts);
+        triangles.resize(triangle_counts.iter().sum(), [0; 3]);
+        let triangle_ranges = split_by(triangles, triangle_counts.iter().copied());
+        let (role, link, slot_id, slot_base, base) =
+            (&*role, &*link, &*slot_id, &*slot_base, &*base);
         triangle_ranges.into_par_iter().enumerate().for_each_init(
             Vec::new,
             |ids: &mut Vec<u32>, (i, out)| {
-                let (local, c) = (locals.get(i), class(i));
+                let (local, c) = (locals.get(i), self.class(i));
                 let mut next = base[i] as u32;
                 ids.clear();
                 ids.extend((0..local.vertices.len()).map(|v| {
@@ -882,64 +1135,56 @@ impl<'a> Welder<'a> {
                 }
             },
         );
-
-        // What later chunks may still use: this chunk's new shared vertices whose node, edge or
-        // face reaches past it, and the earlier open ones that still do.
-        let mut open = Vec::new();
-        if let Some(last) = &self.last {
-            let face_masks = lattice.face_masks();
-            // The last element each new named vertex reaches: a lookup per vertex, in
-            // parallel; the few that stay open are then inserted in order.
-            let until: Vec<u32> = groups
-                .par_iter()
-                .map(|&(_, i, s)| {
-                    let e = start + i as usize;
-                    let v = &class(i as usize).shared[s as usize];
-                    let mask = v.a.mask() | v.b.map_or(0, |b| b.mask());
-                    last.of(e, elements.element(e), mask, &self.faces, face_masks)
-                })
-                .collect();
-            let owner_id = |i: usize, s: u32| slot_id[slot_base[i] + s as usize];
-            let open_vertex = |id: u32, last: u32| OpenVertex {
-                id,
-                position: vertices[(u64::from(id) - first) as usize],
-                last,
-            };
-            let mut fresh = Vec::new();
-            for (g, &(name, i, s)) in groups.iter().enumerate() {
-                if until[g] as usize >= end {
-                    let id = owner_id(i as usize, s);
-                    self.frontier.insert(name, open_vertex(id, until[g]));
-                    fresh.push((id, until[g]));
-                }
-            }
-            for (i, welds) in structural.iter().enumerate() {
-                for &(s, last) in &welds.opens {
-                    let id = owner_id(i, s);
-                    self.face_frontier
-                        .insert(face_key(start + i, s), open_vertex(id, last));
-                    fresh.push((id, last));
-                }
-            }
-            self.frontier.retain(|_, v| v.last as usize >= end);
-            self.face_frontier.retain(|_, v| v.last as usize >= end);
-            // Earlier ids are all below this chunk's `first`, so appending the sorted new ones
-            // keeps the list sorted.
-            self.open.retain(|&(_, last)| last as usize >= end);
-            fresh.sort_unstable();
-            self.open.extend(fresh);
-            open = self.open.iter().map(|&(id, _)| id).collect();
-        }
-        self.next_element = end;
-        self.next_id = base[n];
-        Ok(MeshChunk {
-            first_vertex: first as u32,
-            vertices,
-            triangles,
-            borrowed,
-            open,
-        })
     }
+}
+
+/// What [`Welder::weld`] made of a chunk, for [`Welder::chunk`] to hand on.
+struct Welded {
+    first: u64,
+    vertices: Vec<[f32; 3]>,
+    triangles: Vec<[u32; 3]>,
+    borrowed: Vec<(u32, [f32; 3])>,
+    /// `None` when nothing is ever open (one chunk).
+    fresh: Option<FreshOpen>,
+    /// Slots that took another element's vertex, by structure and by name.
+    paired: u64,
+    named_borrowers: u64,
+}
+
+/// A chunk's vertices that later chunks may still use, welded by name and by structure.
+#[derive(Default)]
+struct FreshOpen {
+    named: Vec<(u128, OpenVertex)>,
+    faces: Vec<(u64, OpenVertex)>,
+}
+
+/// Buffers of a chunk's weld, kept from one chunk to the next: for a big chunk the arrays
+/// over its slots and names are megabytes each, and allocating them afresh every chunk had
+/// each page of them fault in again (glibc hands large freed blocks back to the kernel).
+#[derive(Default)]
+struct Scratch {
+    /// Slots of the chunk's i-th element's shared vertices: `slot_base[i]..slot_base[i + 1]`.
+    slot_base: Vec<usize>,
+    /// Per slot: its role, and the owner's slot (Borrower) or the vertex id (Earlier).
+    role: Vec<Role>,
+    link: Vec<u32>,
+    /// Per element: how many of its slots are welded by name.
+    named: Vec<usize>,
+    /// `(name, element, slot)` of the named slots, sorted by name (`sorted`: sort space).
+    names: Vec<(u128, u32, u32)>,
+    sorted: Vec<(u128, u32, u32)>,
+    /// Where each run of equal names starts, and the earlier chunk's vertex it names.
+    starts: Vec<usize>,
+    earlier: Vec<Option<(u32, [f32; 3])>>,
+    /// The runs no earlier chunk has: `(name, element, slot)` of the owner.
+    groups: Vec<(u128, u32, u32)>,
+    /// Per element: how many vertices it owns, and its first vertex id.
+    owned: Vec<usize>,
+    base: Vec<u64>,
+    /// Per slot: the id its owner gave it (owner slots only).
+    slot_id: Vec<u32>,
+    /// Per element: its triangles.
+    triangle_counts: Vec<usize>,
 }
 
 /// The face frontier's key of slot `slot` of element `e`.
@@ -1154,7 +1399,7 @@ mod tests {
                     .build()
                     .expect("pool");
                 let mut names = triples(n);
-                pool.install(|| sort_names(&mut names));
+                pool.install(|| sort_names(&mut names, &mut Vec::new()));
                 assert!(names == expected, "{n} names on {threads} threads");
             }
         }
