@@ -71,7 +71,7 @@ fn apply_inverse(linear: [[f64; 3]; 3], t: [f64; 3], p: [f64; 3]) -> [f64; 3] {
     for c in 0..3 {
         let pivot = (c..3)
             .max_by(|&a, &b| m[a][c].abs().total_cmp(&m[b][c].abs()))
-            .unwrap();
+            .expect("a column has a largest entry");
         m.swap(c, pivot);
         for r in 0..3 {
             if r != c {
@@ -354,7 +354,7 @@ fn optimisation_keeps_the_error_and_does_not_lower_porosity() {
 }
 
 fn cif_error(text: &str) -> (usize, usize, String) {
-    let e = cif::read("bad.cif", text.as_bytes()).unwrap_err();
+    let e = cif::read("bad.cif", text.as_bytes()).expect_err("the CIF is refused");
     assert_eq!(e.file, "bad.cif");
     (e.line, e.column, e.message)
 }

@@ -50,17 +50,17 @@ impl ExternalSolids for Meshes {
 
 fn bounds(program: &str) -> Aabb {
     Program::parse_str(program)
-        .unwrap()
+        .expect("the program parses")
         .field(&Meshes)
-        .unwrap()
+        .expect("its files resolve")
         .bounds()
 }
 
 fn domain(program: &str) -> Aabb {
     Program::parse_str(program)
-        .unwrap()
+        .expect("the program parses")
         .field(&NoExternalSolids)
-        .unwrap()
+        .expect("it names no file")
         .domain()
 }
 

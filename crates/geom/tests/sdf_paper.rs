@@ -35,8 +35,8 @@ fn run(command: &str) -> Run {
     let mut i = 0;
     while i < args.len() {
         match args[i] {
-            "-s" => samples = parse_samples(args[i + 1]).unwrap(),
-            "-b" => domain = Some(parse_box(args[i + 1]).unwrap()),
+            "-s" => samples = parse_samples(args[i + 1]).expect("valid -s"),
+            "-b" => domain = Some(parse_box(args[i + 1]).expect("valid -b")),
             w => {
                 words.push(w);
                 i += 1;
@@ -45,9 +45,12 @@ fn run(command: &str) -> Run {
         }
         i += 2;
     }
-    let field = Program::parse_args(&words).unwrap().field(&FILES).unwrap();
+    let field = Program::parse_args(&words)
+        .expect("the program parses")
+        .field(&FILES)
+        .expect("its files resolve");
     let domain = domain.unwrap_or_else(|| field.domain());
-    let mesh = stack_lang::mesh(&field, &domain, samples).unwrap();
+    let mesh = stack_lang::mesh(&field, &domain, samples).expect("the program contours");
     let check = check(&mesh);
     assert!(
         check.watertight && check.manifold,

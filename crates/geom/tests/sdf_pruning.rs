@@ -15,7 +15,10 @@ const FILES: SphereFile = SphereFile {
 };
 
 fn field(program: &str, pruning: bool) -> ProgramField {
-    let mut f = Program::parse_str(program).unwrap().field(&FILES).unwrap();
+    let mut f = Program::parse_str(program)
+        .expect("the program parses")
+        .field(&FILES)
+        .expect("its files resolve");
     f.set_pruning(pruning);
     f
 }

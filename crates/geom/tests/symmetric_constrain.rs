@@ -154,7 +154,7 @@ fn td_source(x: [f64; 3]) -> f64 {
 }
 
 fn td_cell(n: usize) -> FittedCell {
-    fit(&Group::td(), n, &from_fn(td_source), &FitOptions::default()).unwrap()
+    fit(&Group::td(), n, &from_fn(td_source), &FitOptions::default()).expect("the Td source fits")
 }
 
 fn coefficient_map(cell: &FittedCell) -> HashMap<[i32; 3], Complex64> {
