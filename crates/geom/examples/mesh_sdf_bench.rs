@@ -6,17 +6,14 @@
 //! `cargo run --release -p latticebuild-geom --example mesh_sdf_bench -- [triangles] [n]`, or
 //! `cargo xtask bench-mesh`. Targets (issue 4, 2 cores): build ≤ 1 s, 128³ distances ≤ 3 s.
 
-#[path = "../tests/common/mesh_gen.rs"]
-mod mesh_gen;
-
 use latticebuild_geom::contour::contour;
 use latticebuild_geom::field::{Grid, PlaneSampler, ScalarField};
 use latticebuild_geom::mesh::Mesh;
 use latticebuild_geom::mesh_io::{Encoding, Format, write_mesh};
 use latticebuild_geom::mesh_read::{self, TriangleSoup};
 use latticebuild_geom::mesh_sdf::{MeshSdf, Mode, SdfOptions};
+use latticebuild_geom::synthetic::{Rng, torus, torus_sd};
 use latticebuild_geom::validate;
-use mesh_gen::{Rng, torus, torus_sd};
 use rayon::prelude::*;
 use std::time::Instant;
 

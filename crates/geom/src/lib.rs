@@ -29,6 +29,7 @@ mod scalar;
 pub mod spelling;
 pub mod stack_lang;
 pub mod symmetric;
+pub mod synthetic;
 #[cfg(test)]
 mod test_meshes;
 pub mod tile;

@@ -3,10 +3,10 @@
 
 use crate::common;
 
-use common::mesh_gen::Rng;
 use common::torus;
 use latticebuild_geom::mesh_io::{self, Encoding, write_mesh};
 use latticebuild_geom::mesh_read::{Format, Location, MeshReadError, read, read_auto};
+use latticebuild_geom::synthetic::Rng;
 
 fn small_files() -> Vec<(Format, &'static str, Vec<u8>)> {
     let mesh = torus(6, 4, 2.0, 0.5, [0.0; 3]);

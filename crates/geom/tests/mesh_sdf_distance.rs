@@ -1,13 +1,11 @@
 //! Signed distances of generated meshes against analytic solids; samplers against point
 //! queries; the band; contouring the field of a mesh.
 
-use crate::common;
-
-use common::mesh_gen::{Rng, box_sd, chord_error, icosphere, norm, sliver_cube};
 use latticebuild_geom::contour::contour;
 use latticebuild_geom::field::{Grid, ScalarField};
 use latticebuild_geom::mesh_read::TriangleSoup;
 use latticebuild_geom::mesh_sdf::{MeshSdf, MeshSdfError, SdfOptions};
+use latticebuild_geom::synthetic::{Rng, box_sd, chord_error, icosphere, norm, sliver_cube};
 use latticebuild_geom::validate;
 
 fn sdf(soup: &TriangleSoup, options: SdfOptions) -> MeshSdf {

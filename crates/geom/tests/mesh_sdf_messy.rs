@@ -2,13 +2,11 @@
 //! faces, flipped faces, slivers, soups read from STL, cavities. What "correct" means for each
 //! is decided in the `mesh_sdf` module docs; these tests hold it.
 
-use crate::common;
-
-use common::mesh_gen::{Rng, box_sd, flip_some, icosphere, norm, sliver_cube};
 use latticebuild_geom::mesh::Mesh;
 use latticebuild_geom::mesh_io::{self, Encoding, write_mesh};
 use latticebuild_geom::mesh_read::{self, TriangleSoup};
 use latticebuild_geom::mesh_sdf::{MeshSdf, SdfOptions};
+use latticebuild_geom::synthetic::{Rng, box_sd, flip_some, icosphere, norm, sliver_cube};
 
 fn sdf(soup: &TriangleSoup) -> MeshSdf {
     MeshSdf::new(soup, SdfOptions::default()).expect("valid mesh")

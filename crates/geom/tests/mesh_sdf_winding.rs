@@ -1,12 +1,12 @@
 //! Winding numbers of generated meshes against their analytic solids, and the hierarchical
 //! evaluation against the exact sum over every triangle.
 
-use crate::common;
-
-use common::mesh_gen::{Rng, chord_error, icosphere, longest_edge, norm, torus, torus_sd};
 use latticebuild_geom::field::{Grid, ScalarField};
 use latticebuild_geom::mesh_read::TriangleSoup;
 use latticebuild_geom::mesh_sdf::{MeshSdf, Mode, SdfOptions};
+use latticebuild_geom::synthetic::{
+    Rng, chord_error, icosphere, longest_edge, norm, torus, torus_sd,
+};
 
 /// Hierarchical (β = 2, second order) against exact, over all our query sets: the stated
 /// accuracy of the default options.

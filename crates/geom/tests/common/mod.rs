@@ -2,12 +2,13 @@
 #![allow(dead_code)]
 
 use latticebuild_geom::mesh::Mesh;
+use latticebuild_geom::synthetic;
 
 /// A torus with `n` segments around the axis and `m` around the tube, outward winding,
 /// vertices at `((R + r cos φ) cos θ, (R + r cos φ) sin θ, r sin φ) + offset`, in `f32` (the
-/// soup of [`mesh_gen::torus`], moved).
+/// soup of [`synthetic::torus`], moved).
 pub fn torus(n: u32, m: u32, big_r: f64, r: f64, offset: [f64; 3]) -> Mesh {
-    let soup = mesh_gen::torus(n, m, big_r, r);
+    let soup = synthetic::torus(n, m, big_r, r);
     Mesh {
         vertices: soup
             .positions
@@ -17,5 +18,4 @@ pub fn torus(n: u32, m: u32, big_r: f64, r: f64, offset: [f64; 3]) -> Mesh {
         triangles: soup.triangles,
     }
 }
-pub mod mesh_gen;
 pub mod sdf_sphere;
