@@ -79,34 +79,13 @@ fn best_of(runs: usize, mut f: impl FnMut()) -> Duration {
         .unwrap_or_default()
 }
 
-/// A closed torus with `n` segments around the axis and `m` around the tube, outward winding.
+/// A closed torus with `n` segments around the axis and `m` around the tube, outward winding,
+/// in `f32`.
 fn torus(n: u32, m: u32, big_r: f64, r: f64) -> Mesh {
-    use std::f64::consts::TAU;
-    let mut vertices = Vec::with_capacity((n * m) as usize);
-    for i in 0..n {
-        let theta = TAU * f64::from(i) / f64::from(n);
-        for j in 0..m {
-            let phi = TAU * f64::from(j) / f64::from(m);
-            let rho = big_r + r * phi.cos();
-            vertices.push([
-                (rho * theta.cos()) as f32,
-                (rho * theta.sin()) as f32,
-                (r * phi.sin()) as f32,
-            ]);
-        }
-    }
-    let id = |i: u32, j: u32| (i % n) * m + (j % m);
-    let mut triangles = Vec::with_capacity(2 * (n * m) as usize);
-    for i in 0..n {
-        for j in 0..m {
-            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            triangles.push([a, b, c]);
-            triangles.push([a, c, d]);
-        }
-    }
+    let soup = latticebuild_geom::synthetic::torus(n, m, big_r, r);
     Mesh {
-        vertices,
-        triangles,
+        vertices: soup.positions.iter().map(|p| p.map(|c| c as f32)).collect(),
+        triangles: soup.triangles,
     }
 }
 
