@@ -34,7 +34,7 @@ use latticebuild_geom::distance::DistanceField;
 use latticebuild_geom::element::Element3;
 use latticebuild_geom::expr;
 use latticebuild_geom::field::{Band, Grid, ScalarField, Solid};
-use latticebuild_geom::mesh::{Mesh, MeshChunk};
+use latticebuild_geom::mesh::{Mesh, MeshChunk, SpareArrays};
 use latticebuild_geom::scaffold::{self, ElementKind, Scaffold};
 use latticebuild_geom::tile::{
     RegionError, TiledRegion, TiledSolid, Transition, chunk_elements_for, extrude,
@@ -368,14 +368,16 @@ impl TileStage {
         let mut check = StreamCheck::new();
         let mut pieces = PieceCounter::new();
         // The chunks handed on, oldest first, until the writers are done with them: their
-        // arrays then serve the chunks tiled next (`MeshChunk::recycle`).
+        // arrays then serve the chunks tiled next (`SpareArrays::recycle`).
         let mut in_flight: VecDeque<Arc<MeshChunk>> = VecDeque::new();
+        let spare = SpareArrays::default();
         let stats = stream_scaffold(
             &scaffold,
             &solid,
             self.skin,
             self.resolution,
             chunk_elements_for(self.resolution, CHUNK_TRIANGLES),
+            &spare,
             &mut |chunk| {
                 let chunk = Arc::new(chunk);
                 // Handed on first, so the writers encode while this thread checks.
@@ -385,7 +387,7 @@ impl TileStage {
                 in_flight.push_back(chunk);
                 while in_flight.front().is_some_and(|c| Arc::strong_count(c) == 1) {
                     if let Some(Ok(done)) = in_flight.pop_front().map(Arc::try_unwrap) {
-                        done.recycle();
+                        spare.recycle(done);
                     }
                 }
                 Ok(())

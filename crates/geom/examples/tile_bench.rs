@@ -9,6 +9,7 @@
 //! not the mesh.
 
 use latticebuild_geom::field::{ScalarField, Solid};
+use latticebuild_geom::mesh::SpareArrays;
 use latticebuild_geom::scaffold::{ElementKind, Scaffold, grid, read_scaffold};
 use latticebuild_geom::tile::{TiledSolid, chunk_elements_for, stream_scaffold, tile_scaffold};
 use std::time::Instant;
@@ -64,13 +65,22 @@ fn report(what: &str, scaffold: &Scaffold, resolution: usize, read: f64) {
                 .unwrap_or(4_000_000),
         );
         let (mut triangles, mut vertices, mut chunks, mut open) = (0usize, 0usize, 0usize, 0usize);
-        let result = stream_scaffold(scaffold, &solid, None, resolution, per_chunk, &mut |c| {
-            triangles += c.triangles.len();
-            vertices += c.vertices.len();
-            chunks += 1;
-            open = open.max(c.open.len());
-            Ok(())
-        });
+        let spare = SpareArrays::default();
+        let result = stream_scaffold(
+            scaffold,
+            &solid,
+            None,
+            resolution,
+            per_chunk,
+            &spare,
+            &mut |c| {
+                triangles += c.triangles.len();
+                vertices += c.vertices.len();
+                chunks += 1;
+                open = open.max(c.open.len());
+                Ok(())
+            },
+        );
         let seconds = start.elapsed().as_secs_f64();
         match result {
             Ok(stats) => println!(

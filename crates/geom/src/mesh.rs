@@ -104,51 +104,47 @@ pub struct MeshChunk {
 }
 
 /// Vertex and triangle arrays of chunks whose consumers are done with them
-/// ([`MeshChunk::recycle`]), for the next chunks a tiling makes ([`spare_arrays`]). A big
-/// tiling makes dozens to hundreds of chunks of megabytes each; arrays made afresh for each
-/// one were handed back to the kernel when freed and every page of them faulted in again.
-static SPARE_ARRAYS: Mutex<Vec<ChunkArrays>> = Mutex::new(Vec::new());
+/// ([`SpareArrays::recycle`]), for the next chunks of the same tiling
+/// ([`crate::tile::stream_scaffold`]). A big tiling makes dozens to hundreds of chunks of
+/// megabytes each; arrays made afresh for each one were handed back to the kernel when freed
+/// and every page of them faulted in again. The caller owns the pool, so it lives as long as
+/// its tiling and is shared by nothing else.
+#[derive(Debug, Default)]
+pub struct SpareArrays(Mutex<Vec<ChunkArrays>>);
 
-/// How many pairs of arrays [`SPARE_ARRAYS`] keeps at most (chunks in flight between the
+/// How many pairs of arrays a [`SpareArrays`] keeps at most (chunks in flight between the
 /// tiler and the last consumer; more are dropped).
 const SPARE_SETS: usize = 4;
 
 type ChunkArrays = (Vec<[f32; 3]>, Vec<[u32; 3]>);
 
-/// Empty vertex and triangle arrays for a new chunk: a recycled chunk's, with their capacity,
-/// or new ones.
-pub(crate) fn spare_arrays() -> ChunkArrays {
-    SPARE_ARRAYS
-        .lock()
-        .unwrap_or_else(PoisonError::into_inner)
-        .pop()
-        .map(|(mut vertices, mut triangles)| {
-            vertices.clear();
-            triangles.clear();
-            (vertices, triangles)
-        })
-        .unwrap_or_default()
-}
+impl SpareArrays {
+    /// Empty vertex and triangle arrays for a new chunk: a recycled chunk's, with their
+    /// capacity, or new ones.
+    pub(crate) fn take(&self) -> ChunkArrays {
+        self.0
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .pop()
+            .map(|(mut vertices, mut triangles)| {
+                vertices.clear();
+                triangles.clear();
+                (vertices, triangles)
+            })
+            .unwrap_or_default()
+    }
 
-/// Drops the recycled arrays ([`spare_arrays`]): a tiling ends, so that they are not held
-/// while the process does other things.
-pub(crate) fn drop_spare_arrays() {
-    SPARE_ARRAYS
-        .lock()
-        .unwrap_or_else(PoisonError::into_inner)
-        .clear();
+    /// Takes back `chunk`'s vertex and triangle arrays for the chunks made next, once
+    /// nothing needs the chunk any more.
+    pub fn recycle(&self, chunk: MeshChunk) {
+        let mut spare = self.0.lock().unwrap_or_else(PoisonError::into_inner);
+        if spare.len() < SPARE_SETS {
+            spare.push((chunk.vertices, chunk.triangles));
+        }
+    }
 }
 
 impl MeshChunk {
-    /// Hands this chunk's vertex and triangle arrays on to the chunks a tiling makes next,
-    /// once nothing needs the chunk any more (its contents are not read again).
-    pub fn recycle(self) {
-        let mut spare = SPARE_ARRAYS.lock().unwrap_or_else(PoisonError::into_inner);
-        if spare.len() < SPARE_SETS {
-            spare.push((self.vertices, self.triangles));
-        }
-    }
-
     /// The id one past this chunk's last vertex (the next chunk's `first_vertex`).
     pub fn end_vertex(&self) -> u32 {
         self.first_vertex + self.vertices.len() as u32

@@ -56,7 +56,7 @@ use rayon::prelude::*;
 use crate::contour2d::Element2;
 use crate::element::Element3;
 use crate::field::{ScalarField, Solid};
-use crate::mesh::{Mesh, MeshChunk};
+use crate::mesh::{Mesh, MeshChunk, SpareArrays};
 use lattice::{Lattice, Weights};
 use local::Samples;
 use shape::{Order, Shape};
@@ -305,6 +305,7 @@ fn stream_with(
     skin: Option<&Skin>,
     resolution: usize,
     chunk_elements: usize,
+    spare: &SpareArrays,
     sink: &mut ChunkSink,
 ) -> Result<TileStats, TileError> {
     let lattice = checked_lattice(elements, solid, resolution)?;
@@ -315,7 +316,10 @@ fn stream_with(
         lattice.as_ref(),
         solid,
         skin,
-        chunk_elements,
+        Chunking {
+            elements: chunk_elements,
+            spare,
+        },
         sink,
     )
 }
@@ -413,7 +417,10 @@ fn tile_on(
         lattice,
         solid,
         skin,
-        usize::MAX,
+        Chunking {
+            elements: usize::MAX,
+            spare: &SpareArrays::default(),
+        },
         &mut |chunk| {
             // One chunk holds every element: its arrays are the mesh.
             mesh.vertices = chunk.vertices;
@@ -422,6 +429,13 @@ fn tile_on(
         },
     )?;
     Ok((mesh, stats))
+}
+
+/// How a streamed tiling cuts its mesh: chunks of `elements` elements, their arrays taken
+/// from `spare`.
+struct Chunking<'a> {
+    elements: usize,
+    spare: &'a SpareArrays,
 }
 
 /// Where a streamed tiling's chunks go, in order; an error stops the tiling. It runs on a
@@ -442,13 +456,17 @@ fn stream_on(
     lattice: &dyn Lattice,
     solid: &TiledSolid,
     skin: Option<&Skin>,
-    chunk_elements: usize,
+    chunking: Chunking<'_>,
     sink: &mut ChunkSink,
 ) -> Result<TileStats, TileError> {
+    let Chunking {
+        elements: chunk_elements,
+        spare,
+    } = chunking;
     let count = elements.count();
     let per_chunk = chunk_elements.clamp(1, count.max(1));
     let chunks = count.div_ceil(per_chunk).max(1);
-    let mut welder = Welder::new(elements, lattice, chunks > 1)?;
+    let mut welder = Welder::new(elements, lattice, chunks > 1, spare)?;
     let cell = symmetric_samples(lattice, solid.cell);
     let band = lattice.takes_bands() && solid.solid.band().is_some();
     if solid.is_uniform() && skin.is_none() {
@@ -487,20 +505,8 @@ fn stream_on(
 }
 
 /// Makes chunks `0..chunks` in order with `make`, handing each to `sink` while the next one
-/// is made (`rayon::join`); the first error stops both. The arrays the sink recycled
-/// ([`MeshChunk::recycle`]) are dropped at the end.
+/// is made (`rayon::join`); the first error stops both.
 fn pipeline(
-    chunks: usize,
-    make: impl FnMut(usize) -> Result<MeshChunk, TileError> + Send,
-    sink: &mut ChunkSink,
-) -> Result<(), TileError> {
-    let done = make_chunks(chunks, make, sink);
-    crate::mesh::drop_spare_arrays();
-    done
-}
-
-/// [`pipeline`]'s loop.
-fn make_chunks(
     chunks: usize,
     mut make: impl FnMut(usize) -> Result<MeshChunk, TileError> + Send,
     sink: &mut ChunkSink,

@@ -21,7 +21,7 @@
 //! weights (never on the element's frame); the boundary faces are the faces used by one
 //! element, with their corner nodes only (quadratic faces are flattened to their corners).
 
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, SpareArrays};
 use crate::mesh_read::TriangleSoup;
 use crate::mesh_sdf::{MeshSdf, SdfOptions};
 use crate::scaffold::Scaffold;
@@ -184,13 +184,16 @@ pub fn tile_scaffold_with_skin(
 /// [`tile_scaffold_with_skin`], handing the mesh to `sink` a chunk of `chunk_elements` elements
 /// at a time, in element order ([`crate::mesh::MeshChunk`]; see
 /// [`super::chunk_elements_for`]). The chunks concatenate to the mesh
-/// [`tile_scaffold_with_skin`] makes, bit for bit, whatever the chunk size.
+/// [`tile_scaffold_with_skin`] makes, bit for bit, whatever the chunk size. Each chunk's
+/// arrays come from `spare`, where the sink may hand finished chunks back
+/// ([`SpareArrays::recycle`]).
 pub fn stream_scaffold(
     scaffold: &Scaffold,
     solid: &TiledSolid,
     skin: Option<f64>,
     resolution: usize,
     chunk_elements: usize,
+    spare: &SpareArrays,
     sink: &mut ChunkSink,
 ) -> Result<TileStats, TileError> {
     check_f32_room(scaffold, resolution, 0.0)?;
@@ -205,6 +208,7 @@ pub fn stream_scaffold(
         skin.as_ref(),
         resolution,
         chunk_elements,
+        spare,
         sink,
     )
     .map_err(|e| ordered.tagged(e))

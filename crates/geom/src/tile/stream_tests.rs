@@ -32,10 +32,19 @@ fn stream(
     per_chunk: usize,
 ) -> (Vec<MeshChunk>, TileStats) {
     let mut chunks = Vec::new();
-    let stats = stream_scaffold(scaffold, solid, skin, resolution, per_chunk, &mut |c| {
-        chunks.push(c);
-        Ok(())
-    })
+    let spare = SpareArrays::default();
+    let stats = stream_scaffold(
+        scaffold,
+        solid,
+        skin,
+        resolution,
+        per_chunk,
+        &spare,
+        &mut |c| {
+            chunks.push(c);
+            Ok(())
+        },
+    )
     .unwrap_or_else(|e| panic!("{e}"));
     (chunks, stats)
 }
@@ -186,14 +195,22 @@ fn a_failing_sink_stops_the_tiling_with_its_message() {
     let cell = SchwarzP(0.0);
     let solid = TiledSolid::of(&cell, Solid::Inside { offset: 0.0 });
     let mut calls = 0;
-    let result = stream_scaffold(&scaffold, &solid, None, 4, 5, &mut |_| {
-        calls += 1;
-        if calls == 2 {
-            Err("disk full".into())
-        } else {
-            Ok(())
-        }
-    });
+    let result = stream_scaffold(
+        &scaffold,
+        &solid,
+        None,
+        4,
+        5,
+        &SpareArrays::default(),
+        &mut |_| {
+            calls += 1;
+            if calls == 2 {
+                Err("disk full".into())
+            } else {
+                Ok(())
+            }
+        },
+    );
     assert_eq!(result, Err(TileError::Sink("disk full".into())));
     assert_eq!(calls, 2, "no chunk after the failing one");
 }

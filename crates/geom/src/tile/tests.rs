@@ -439,7 +439,18 @@ fn lattices_too_fine_for_f32_where_the_scaffold_lies_are_refused() {
             Ok(_) => panic!("{kind:?}: tiled at resolution 24"),
         };
         refused(tile_scaffold(&far, &solid, 24).map(|_| ()));
-        refused(stream_scaffold(&far, &solid, None, 24, 64, &mut |_| Ok(())).map(|_| ()));
+        refused(
+            stream_scaffold(
+                &far,
+                &solid,
+                None,
+                24,
+                64,
+                &SpareArrays::default(),
+                &mut |_| Ok(()),
+            )
+            .map(|_| ()),
+        );
         let message = tile_scaffold(&far, &solid, 24)
             .map(|_| ())
             .unwrap_err()

@@ -41,7 +41,7 @@ impl<S: ElementShape> Corners for Elements<'_, S> {
         self.map.map(e, xi)
     }
 }
-use crate::mesh::{MeshChunk, spare_arrays};
+use crate::mesh::{MeshChunk, SpareArrays};
 
 /// A local vertex on the element boundary: the weights of its lattice ends, and the faces
 /// whose caps alone use it (0 when surface triangles use it).
@@ -532,6 +532,8 @@ enum FaceView {
 pub struct Welder<'a> {
     elements: &'a dyn Corners,
     lattice: &'a dyn Lattice,
+    /// Where each chunk's vertex and triangle arrays come from.
+    spare: &'a SpareArrays,
     faces: FaceTable,
     /// `None` when one chunk takes every element: nothing is ever open.
     last: Option<LastUsers>,
@@ -560,12 +562,14 @@ impl<'a> Welder<'a> {
         elements: &'a dyn Corners,
         lattice: &'a dyn Lattice,
         chunked: bool,
+        spare: &'a SpareArrays,
     ) -> Result<Welder<'a>, TileError> {
         let faces = FaceTable::new(elements, lattice.face_masks())?;
         let last = chunked.then(|| LastUsers::new(elements, lattice.face_masks()));
         Ok(Welder {
             elements,
             lattice,
+            spare,
             faces,
             last,
             frontier: HashMap::default(),
@@ -687,7 +691,7 @@ impl<'a> Welder<'a> {
         }
         borrowed.sort_unstable_by_key(|&(id, _)| id);
         let first = self.next_id;
-        let (mut vertices, mut triangles) = spare_arrays();
+        let (mut vertices, mut triangles) = self.spare.take();
         self.place_vertices(&span, first, scratch, &mut vertices)?;
         span.triangles(locals, scratch, &mut triangles);
         let fresh = self
@@ -1301,7 +1305,9 @@ mod tests {
         let chunks = count.div_ceil(per_chunk);
         let all = vec![local.clone(); count];
         let run = |uniform: bool| {
-            let mut welder = Welder::new(elements, lattice, chunks > 1).expect("conforming");
+            let spare = SpareArrays::default();
+            let mut welder =
+                Welder::new(elements, lattice, chunks > 1, &spare).expect("conforming");
             let out: Vec<MeshChunk> = (0..chunks)
                 .map(|k| {
                     let locals = match uniform {
