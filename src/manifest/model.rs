@@ -110,7 +110,18 @@ impl PsTransform {
     pub fn rotation(&self) -> [[f64; 3]; 3] {
         let norm = self.axis.iter().map(|v| v * v).sum::<f64>().sqrt();
         let k = self.axis.map(|v| v / norm);
-        let (sin, cos) = self.angle_degrees.to_radians().sin_cos();
+        // Quarter turns exactly, so they keep integer term vectors integer.
+        let quarter = self.angle_degrees / 90.0;
+        let (sin, cos) = if quarter == quarter.round() && quarter.abs() < 1e15 {
+            match quarter.rem_euclid(4.0) as u8 {
+                0 => (0.0, 1.0),
+                1 => (1.0, 0.0),
+                2 => (0.0, -1.0),
+                _ => (-1.0, 0.0),
+            }
+        } else {
+            self.angle_degrees.to_radians().sin_cos()
+        };
         let cross = [[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]];
         std::array::from_fn(|i| {
             std::array::from_fn(|j| {

@@ -71,9 +71,7 @@ fn transforms_validate_with_defaults_for_the_parts_not_given() {
     // r ↦ t + R·S·r: (1, 0, 0) scaled to (2, 0, 0), then a quarter turn about z to (0, 2, 0).
     let l = p.linear();
     let image: Vec<f64> = (0..3).map(|i| l[i][0]).collect();
-    for (got, want) in image.iter().zip([0.0, 2.0, 0.0]) {
-        assert!((got - want).abs() <= 1e-15, "{image:?}");
-    }
+    assert_eq!(image, [0.0, 2.0, 0.0], "a quarter turn is exact");
     let q = transform_of("q").expect("a transform");
     assert_eq!((q.scale, q.translate), ([1.0, -1.0, 0.5], [0.5, 0.0, -1.0]));
     assert_eq!(q.angle_degrees, 0.0);
