@@ -125,7 +125,7 @@ impl CellCompiler<'_> {
             | CellSource::Expr(_)
             | CellSource::Mesh(_)
             | CellSource::Crystal(_)
-            | CellSource::Ps(_) => {
+            | CellSource::Ps { .. } => {
                 let formula = self.source(graph, name);
                 let fit = Stage::Fit(FitStage { spec: spec.clone() });
                 match spec.n {

@@ -73,8 +73,95 @@ pub enum CellSource {
     Mesh(MeshCell),
     /// A loci surface reconstructed from a crystal structure (`crystal = "file.cif"`).
     Crystal(CrystalCell),
-    /// A periodic-surface model given term by term (`ps = { terms = [...] }`).
-    Ps(Vec<latticebuild_geom::periodic::PsTerm>),
+    /// A periodic-surface model given term by term (`ps = { terms = [...] }`), moved by
+    /// `transform` when given.
+    Ps {
+        terms: Vec<latticebuild_geom::periodic::PsTerm>,
+        transform: Option<PsTransform>,
+    },
+}
+
+/// `transform = { scale, rotate, translate }` of a `ps` or `crystal` cell: the point map
+/// `r ↦ t + R·S·r` in cell coordinates (scale first, then rotate, then translate). The
+/// transformed model's value at `r` is the original's at the inverse image of `r`.
+/// Validation guarantees finite numbers, non-zero scale factors and a non-zero axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PsTransform {
+    /// Per-axis factors `S` (1 when not given).
+    pub scale: [f64; 3],
+    /// The rotation axis (not necessarily of unit length) and angle in degrees,
+    /// counter-clockwise about the axis (right-hand rule); angle 0 when not given.
+    pub axis: [f64; 3],
+    pub angle_degrees: f64,
+    /// `t` (0 when not given).
+    pub translate: [f64; 3],
+}
+
+impl PsTransform {
+    /// The identity's parts, for filling in what is not given.
+    pub const IDENTITY: PsTransform = PsTransform {
+        scale: [1.0; 3],
+        axis: [0.0, 0.0, 1.0],
+        angle_degrees: 0.0,
+        translate: [0.0; 3],
+    };
+
+    /// The rotation `R` (Rodrigues' formula about the unit axis).
+    pub fn rotation(&self) -> [[f64; 3]; 3] {
+        let norm = self.axis.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let k = self.axis.map(|v| v / norm);
+        // Quarter turns exactly, so they keep integer term vectors integer.
+        let quarter = self.angle_degrees / 90.0;
+        let (sin, cos) = if quarter == quarter.round() && quarter.abs() < 1e15 {
+            match quarter.rem_euclid(4.0) as u8 {
+                0 => (0.0, 1.0),
+                1 => (1.0, 0.0),
+                2 => (0.0, -1.0),
+                _ => (-1.0, 0.0),
+            }
+        } else {
+            self.angle_degrees.to_radians().sin_cos()
+        };
+        let cross = [[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]];
+        std::array::from_fn(|i| {
+            std::array::from_fn(|j| {
+                let identity = if i == j { 1.0 } else { 0.0 };
+                cos * identity + sin * cross[i][j] + (1.0 - cos) * k[i] * k[j]
+            })
+        })
+    }
+
+    /// The linear part `R·S`.
+    pub fn linear(&self) -> [[f64; 3]; 3] {
+        let r = self.rotation();
+        std::array::from_fn(|i| std::array::from_fn(|j| r[i][j] * self.scale[j]))
+    }
+
+    /// The model moved by this map: exact on the terms (Wang's lemmas). `None` only for a
+    /// singular linear part, which validation excludes.
+    pub fn apply(
+        &self,
+        model: &latticebuild_geom::periodic::PsModel,
+    ) -> Option<latticebuild_geom::periodic::PsModel> {
+        model.transformed(self.linear(), self.translate)
+    }
+
+    /// The numbers, in a fixed order, for cache keys: scale, axis, angle, translate.
+    pub fn numbers(&self) -> [f64; 10] {
+        let [s, a, t] = [self.scale, self.axis, self.translate];
+        [
+            s[0],
+            s[1],
+            s[2],
+            a[0],
+            a[1],
+            a[2],
+            self.angle_degrees,
+            t[0],
+            t[1],
+            t[2],
+        ]
+    }
 }
 
 /// A cell whose surface passes through the atoms of a crystal file (fractional coordinates:
@@ -92,6 +179,8 @@ pub struct CrystalCell {
     pub include_images: bool,
     /// Drop terms greedily to raise the porosity (Wang §5.3).
     pub optimize: bool,
+    /// Applied to the reconstructed model's terms.
+    pub transform: Option<PsTransform>,
 }
 
 /// A file the manifest names as an input: a triangle mesh (`mesh = …`, `within = …`), a

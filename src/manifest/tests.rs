@@ -430,6 +430,7 @@ fn every_invalid_case_has_its_own_golden_file() {
         mesh_tests::MESH_ERR_CASES,
         program_tests::SDF_ERR_CASES,
         symmetry_tests::SYM_ERR_CASES,
+        transform_tests::TRANSFORM_ERR_CASES,
     ];
     let mut files = std::collections::BTreeSet::new();
     for case in tables.iter().copied().flatten() {
@@ -851,6 +852,7 @@ fn reference_example_is_valid() {
 
 mod mesh_tests;
 mod symmetry_tests;
+mod transform_tests;
 
 mod program_tests;
 
@@ -871,9 +873,10 @@ mod crystal_cells {
         assert_eq!(c.species.as_deref(), Some("Si"));
         assert_eq!((c.tolerance, c.max_scale), (1e-9, 4));
         assert!(c.include_images && !c.optimize);
-        let CellSource::Ps(terms) = &manifest.cells["p"].source else {
+        let CellSource::Ps { terms, transform } = &manifest.cells["p"].source else {
             panic!("not a ps cell");
         };
+        assert!(transform.is_none() && c.transform.is_none());
         assert_eq!(terms.len(), 2);
         assert_eq!(terms[0].vector, [1.0, 1.0, 1.0, 0.0]);
         assert_eq!((terms[1].scale, terms[1].vector[3]), (2.0, 0.25));

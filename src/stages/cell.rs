@@ -8,7 +8,7 @@ use latticebuild_geom::{expr, tpms};
 
 use super::StageError;
 use crate::cache::KeyBuilder;
-use crate::manifest::{Cell, CellSource};
+use crate::manifest::{Cell, CellSource, PsTransform};
 
 pub const VERSION: u32 = 1;
 
@@ -28,7 +28,14 @@ impl CellStage {
         match &self.source {
             CellSource::Tpms(name) => key.param("tpms", name.as_str()),
             CellSource::Expr(text) => key.param("expr", text.as_str()),
-            CellSource::Ps(terms) => key.param("ps", ps_payload(terms)),
+            // The transform only when given: a cell without one keeps its key.
+            CellSource::Ps { terms, transform } => {
+                let key = key.param("ps", super::crystal::encode(&PsModel::new(terms.to_vec())));
+                match transform {
+                    Some(t) => key.param("transform", t.numbers()),
+                    None => key,
+                }
+            }
             CellSource::Blend { .. }
             | CellSource::Minkowski { .. }
             | CellSource::Mesh(_)
@@ -48,7 +55,9 @@ impl CellStage {
                 .formula
                 .to_string(),
             CellSource::Expr(text) => text.clone(),
-            CellSource::Ps(terms) => return Ok(ps_payload(terms)),
+            CellSource::Ps { terms, transform } => {
+                return ps_payload(terms, transform.as_ref());
+            }
             CellSource::Blend { .. }
             | CellSource::Minkowski { .. }
             | CellSource::Mesh(_)
@@ -62,9 +71,17 @@ impl CellStage {
     }
 }
 
-/// The payload of an explicit PS model: the same as a crystal cell's.
-fn ps_payload(terms: &[PsTerm]) -> Vec<u8> {
-    super::crystal::encode(&PsModel::new(terms.to_vec()))
+/// The payload of an explicit PS model, moved by its transform: the same as a crystal cell's.
+pub fn ps_payload(
+    terms: &[PsTerm],
+    transform: Option<&PsTransform>,
+) -> Result<Vec<u8>, StageError> {
+    let model = PsModel::new(terms.to_vec());
+    let model = match transform {
+        None => model,
+        Some(t) => super::crystal::transform(&model, t)?,
+    };
+    Ok(super::crystal::encode(&model))
 }
 
 /// The field of a cell payload: a mesh cell's (see [`super::mesh`]), a PS model's (see

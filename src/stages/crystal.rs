@@ -16,7 +16,7 @@ use latticebuild_geom::periodic::{ExpandOptions, PsModel, PsTerm, positions_of, 
 
 use super::StageError;
 use crate::cache::KeyBuilder;
-use crate::manifest::CrystalCell;
+use crate::manifest::{CrystalCell, PsTransform};
 
 pub const VERSION: u32 = 1;
 
@@ -36,12 +36,18 @@ impl CrystalStage {
             .and_then(|e| e.to_str())
             .unwrap_or("")
             .to_ascii_lowercase();
-        key.param("format", extension)
+        let key = key
+            .param("format", extension)
             .param("species", self.cell.species.clone().unwrap_or_default())
             .param("tolerance", self.cell.tolerance)
             .param("max_scale", self.cell.max_scale)
             .param("include_images", self.cell.include_images)
-            .param("optimize", self.cell.optimize)
+            .param("optimize", self.cell.optimize);
+        // Only when given, so a cell without transform keeps its key.
+        match &self.cell.transform {
+            Some(t) => key.param("transform", t.numbers()),
+            None => key,
+        }
     }
 
     pub fn run(&self, file: &[u8]) -> Result<Vec<u8>, StageError> {
@@ -66,8 +72,18 @@ impl CrystalStage {
                 self.cell.file.given, r.metrics.max_error, self.cell.max_scale, options.tolerance
             )));
         }
-        Ok(encode(&r.model))
+        match &self.cell.transform {
+            Some(t) => Ok(encode(&transform(&r.model, t)?)),
+            None => Ok(encode(&r.model)),
+        }
     }
+}
+
+/// A PS model moved by a cell's `transform`, exactly on its terms (Wang's lemmas).
+pub fn transform(model: &PsModel, t: &PsTransform) -> Result<PsModel, StageError> {
+    t.apply(model).ok_or_else(|| {
+        StageError::Internal("a singular `transform` (manifest validation missed it)".into())
+    })
 }
 
 /// A crystal file's atoms and the surface through them.
@@ -185,5 +201,157 @@ mod tests {
         assert!(is_ps_cell(&bytes));
         assert_eq!(decode(&bytes).unwrap(), model);
         assert!(decode(&bytes[..bytes.len() - 1]).is_err());
+    }
+
+    /// The cell of a manifest's `[cells.c]`.
+    fn cell_of(text: &str) -> crate::manifest::Cell {
+        let manifest = crate::manifest::parse(text, std::path::Path::new("lattice.toml"), &[])
+            .unwrap_or_else(|e| panic!("valid manifest: {}", crate::diagnostics::render(&e)));
+        manifest.cells["c"].clone()
+    }
+
+    /// Σ μ cos(2π κ (a x + b y + c z + θ)), written out here.
+    fn psi(terms: &[[f64; 6]], p: [f64; 3]) -> f64 {
+        terms
+            .iter()
+            .map(|[mu, kappa, a, b, c, theta]| {
+                mu * (std::f64::consts::TAU * kappa * (a * p[0] + b * p[1] + c * p[2] + theta))
+                    .cos()
+            })
+            .sum()
+    }
+
+    /// A `ps` cell with `transform` gives, through the manifest and the cell stage, a model
+    /// whose value at r is the untransformed one's at T⁻¹ r = S⁻¹ Rᵀ (r − t), with R built
+    /// here from a quaternion.
+    #[test]
+    fn a_transformed_ps_cell_is_the_model_at_the_inverse_point() {
+        let terms = [
+            [1.0, 1.0, 1.0, 0.0, 0.0, 0.0],
+            [0.5, 2.0, 0.0, 1.0, -1.0, 0.25],
+            [-0.75, 1.0, 1.0, 1.0, 1.0, 0.1],
+        ];
+        let text = "[cells.c]\nps = { terms = [\
+            { moment = 1.0, scale = 1, vector = [1, 0, 0, 0] }, \
+            { moment = 0.5, scale = 2, vector = [0, 1, -1, 0.25] }, \
+            { moment = -0.75, scale = 1, vector = [1, 1, 1, 0.1] }] }\n\
+            transform = { scale = [2, 0.5, -1.5], rotate = { axis = [1, 2, 2], angle = 30 }, \
+            translate = [0.3, -0.2, 0.7] }\n";
+        let cell = cell_of(text);
+        let payload = crate::stages::cell::CellStage::new(&cell)
+            .run()
+            .expect("cell stage");
+        let model = decode(&payload).expect("a PS payload");
+
+        // R from the unit quaternion (cos θ/2, sin θ/2 · k), k = (1, 2, 2)/3.
+        let half = 30f64.to_radians() / 2.0;
+        let (w, x, y, z) = (
+            half.cos(),
+            half.sin() / 3.0,
+            2.0 * half.sin() / 3.0,
+            2.0 * half.sin() / 3.0,
+        );
+        let r = [
+            [
+                1.0 - 2.0 * (y * y + z * z),
+                2.0 * (x * y - z * w),
+                2.0 * (x * z + y * w),
+            ],
+            [
+                2.0 * (x * y + z * w),
+                1.0 - 2.0 * (x * x + z * z),
+                2.0 * (y * z - x * w),
+            ],
+            [
+                2.0 * (x * z - y * w),
+                2.0 * (y * z + x * w),
+                1.0 - 2.0 * (x * x + y * y),
+            ],
+        ];
+        let (s, t) = ([2.0, 0.5, -1.5], [0.3, -0.2, 0.7]);
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 4.0 - 2.0
+        };
+        for _ in 0..300 {
+            let p = [next(), next(), next()];
+            let d = [p[0] - t[0], p[1] - t[1], p[2] - t[2]];
+            let inverse: [f64; 3] =
+                std::array::from_fn(|j| (0..3).map(|i| r[i][j] * d[i]).sum::<f64>() / s[j]);
+            let (got, want) = (model.value(p), psi(&terms, inverse));
+            assert!((got - want).abs() <= 1e-12, "at {p:?}: {got} vs {want}");
+        }
+        // Without the transform, the payload and the key are the untransformed model's.
+        let plain = cell_of(&text[..text.find("transform").expect("transform")]);
+        let plain_payload = crate::stages::cell::CellStage::new(&plain)
+            .run()
+            .expect("cell stage");
+        let untransformed = decode(&plain_payload).expect("a PS payload");
+        for p in [[0.1, 0.2, 0.3], [-1.0, 0.5, 2.0]] {
+            assert!((untransformed.value(p) - psi(&terms, p)).abs() <= 1e-12);
+        }
+    }
+
+    /// A crystal cell translated by t: the same vectors, each phase θ − (a, b, c)·t.
+    #[test]
+    fn a_translated_crystal_cell_shifts_only_the_phases() {
+        let nacl = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/crates/geom/tests/data/crystals/NaCl.cif"
+        );
+        let bytes = std::fs::read(nacl).expect("NaCl.cif");
+        let base = "[cells.c]\ncrystal = \"NaCl.cif\"\nspecies = \"Na\"\n";
+        let run = |text: &str| {
+            let crate::manifest::CellSource::Crystal(cell) = cell_of(text).source else {
+                panic!("not a crystal cell");
+            };
+            let stage = CrystalStage { cell };
+            let model = decode(&stage.run(&bytes).expect("crystal stage")).expect("payload");
+            (stage, model)
+        };
+        let (plain_stage, plain) = run(base);
+        let moved_text = format!("{base}transform = {{ translate = [0.5, 0, 0] }}\n");
+        let (moved_stage, moved) = run(&moved_text);
+        assert!(!plain.terms.is_empty());
+        assert_eq!(plain.terms.len(), moved.terms.len());
+        for (p, m) in plain.terms.iter().zip(&moved.terms) {
+            assert_eq!((p.moment, p.scale), (m.moment, m.scale));
+            assert_eq!(p.vector[..3], m.vector[..3]);
+            let expected = p.vector[3] - p.vector[0] * 0.5;
+            assert!(
+                (m.vector[3] - expected).abs() <= 1e-15,
+                "{:?} → {:?}",
+                p.vector,
+                m.vector
+            );
+        }
+        // The translation is in the key; the cell without it keeps the key of a cell as before.
+        let key = |s: &CrystalStage| {
+            s.key_params(crate::cache::KeyBuilder::new("crystal", VERSION))
+                .build()
+                .expect("a key")
+                .0
+        };
+        assert_ne!(key(&plain_stage), key(&moved_stage));
+        let before = crate::cache::KeyBuilder::new("crystal", VERSION)
+            .param("format", "cif")
+            .param("species", "Na")
+            .param("tolerance", 1e-9)
+            .param("max_scale", 8u32)
+            .param("include_images", false)
+            .param("optimize", false)
+            .build()
+            .expect("a key")
+            .0;
+        assert_eq!(key(&plain_stage), before);
+        let mut other = moved_stage.clone();
+        other.cell.transform = Some(crate::manifest::PsTransform {
+            translate: [0.25, 0.0, 0.0],
+            ..crate::manifest::PsTransform::IDENTITY
+        });
+        assert_ne!(key(&other), key(&moved_stage));
     }
 }

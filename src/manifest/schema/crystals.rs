@@ -7,12 +7,14 @@
 //!   extension checked; whether it exists is checked when a manifest is loaded from disk.
 //! - `species` and `reconstruct` are errors on a cell without `crystal`, naming what is
 //!   missing; every term of `ps` is checked, and each error points at the term's value.
+//! - `transform` is an error on a cell that is neither `ps` nor `crystal`; a given transform
+//!   has finite numbers, non-zero scale factors and a non-zero rotation axis.
 
 use latticebuild_geom::periodic::PsTerm;
 use toml::de::DeValue;
 
-use super::super::model::{CellSource, CrystalCell};
-use super::keys::{PS_KEYS, RECONSTRUCT_KEYS, TERM_KEYS};
+use super::super::model::{CellSource, CrystalCell, PsTransform};
+use super::keys::{PS_KEYS, RECONSTRUCT_KEYS, ROTATE_KEYS, TERM_KEYS, TRANSFORM_KEYS};
 use super::meshes::FileKind;
 use super::{Checker, Fields, Value};
 
@@ -58,6 +60,7 @@ impl Checker<'_, '_, '_> {
             max_scale: 8,
             include_images: false,
             optimize: false,
+            transform: None,
         }))
     }
 
@@ -216,7 +219,10 @@ impl Checker<'_, '_, '_> {
         checked
             .into_iter()
             .collect::<Option<Vec<_>>>()
-            .map(CellSource::Ps)
+            .map(|terms| CellSource::Ps {
+                terms,
+                transform: None,
+            })
     }
 
     fn ps_term(&mut self, key: &str, value: &Value<'_>) -> Option<PsTerm> {
@@ -289,5 +295,202 @@ impl Checker<'_, '_, '_> {
             }
         }
         ok.then_some(vector)
+    }
+
+    /// `transform = { scale, rotate, translate }` of a `ps` or `crystal` cell: `Some(None)`
+    /// when absent, `None` after an error (also when given to another cell).
+    pub(super) fn ps_transform(
+        &mut self,
+        cell: &str,
+        fields: &Fields<'_, '_>,
+        applies: bool,
+    ) -> Option<Option<PsTransform>> {
+        let key = format!("cells.{cell}.transform");
+        let Some(&(k, value)) = fields.get("transform") else {
+            return Some(None);
+        };
+        let example = "{ translate = [0.5, 0, 0], rotate = { axis = [0, 0, 1], angle = 45 } }";
+        if !applies {
+            self.error(
+                k.span(),
+                &format!("`{key}` applies only to `ps` and `crystal` cells"),
+                &format!("cell `{cell}` has neither `ps` nor `crystal`"),
+                Some("remove `transform`, or give the cell `ps = { terms = [...] }` or `crystal = \"structure.cif\"`"),
+            );
+            return None;
+        }
+        let table = self.table(&key, value, &format!("write it as `transform = {example}`"))?;
+        let within = format!("in `{key}`");
+        let inner = self.fields(table, &TRANSFORM_KEYS, &within);
+        if table.is_empty() {
+            self.error(
+                value.span(),
+                &format!("`{key}` is empty"),
+                "expected at least one of `scale`, `rotate`, `translate`",
+                Some(&format!(
+                    "write it as `transform = {example}`, or remove it"
+                )),
+            );
+            return None;
+        }
+        let sub = |k: &str| format!("{key}.{k}");
+        let mut transform = PsTransform::IDENTITY;
+        let mut ok = true;
+        if let Some((_, v)) = inner.get("scale") {
+            match self.scale_factors(&sub("scale"), v) {
+                Some(s) => transform.scale = s,
+                None => ok = false,
+            }
+        }
+        if let Some((_, v)) = inner.get("rotate") {
+            match self.rotation(&sub("rotate"), v) {
+                Some((axis, angle)) => {
+                    transform.axis = axis;
+                    transform.angle_degrees = angle;
+                }
+                None => ok = false,
+            }
+        }
+        if let Some((_, v)) = inner.get("translate") {
+            let help = "write it as `translate = [0.5, 0, 0]` (cell coordinates, period 1)";
+            match self.vec3(&sub("translate"), v, help) {
+                Some(t) => transform.translate = t,
+                None => ok = false,
+            }
+        }
+        ok.then_some(Some(transform))
+    }
+
+    /// `rotate = { axis = [x, y, z], angle = DEG }`: the axis and the angle in degrees.
+    fn rotation(&mut self, key: &str, value: &Value<'_>) -> Option<([f64; 3], f64)> {
+        let example = "{ axis = [0, 0, 1], angle = 90 }";
+        let table = self.table(key, value, &format!("write it as `rotate = {example}`"))?;
+        let within = format!("in `{key}`");
+        let fields = self.fields(table, &ROTATE_KEYS, &within);
+        let mut parts = [None, None];
+        for (slot, (k, help)) in parts.iter_mut().zip([
+            ("axis", "add `axis = [0, 0, 1]` (the axis of the rotation)"),
+            (
+                "angle",
+                "add `angle = 90` (degrees, counter-clockwise about the axis)",
+            ),
+        ]) {
+            match fields.get(k) {
+                Some((_, v)) => *slot = Some(v),
+                None => {
+                    let label = format!("missing `{k}`");
+                    self.missing(&fields, &value.span(), k, &within, &label, help);
+                }
+            }
+        }
+        let [Some(axis), Some(angle)] = parts else {
+            return None;
+        };
+        let axis_value = axis;
+        let axis = self.vec3(
+            &format!("{key}.axis"),
+            axis_value,
+            "write it as `axis = [0, 0, 1]`",
+        );
+        let angle = self.transform_number(
+            &format!("{key}.angle"),
+            angle,
+            "a number",
+            "give the angle in degrees, like `angle = 90`",
+        );
+        let axis = axis?;
+        let length = axis.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if !(length.is_finite() && length > 0.0) {
+            let shown = self.raw(axis_value);
+            self.error(
+                axis_value.span(),
+                &format!("`{key}.axis` must not be zero"),
+                &format!("found `{shown}`"),
+                Some("give the direction to rotate about, like `axis = [0, 0, 1]`"),
+            );
+            return None;
+        }
+        Some((axis, angle?))
+    }
+
+    /// `scale = s` or `[sx, sy, sz]`: non-zero finite factors.
+    fn scale_factors(&mut self, key: &str, value: &Value<'_>) -> Option<[f64; 3]> {
+        let help = "give a non-zero factor, like `scale = 2` or `scale = [1, 1, 2]`";
+        let factor = |this: &mut Self, v: &Value<'_>, expected: &str| {
+            let n = this.transform_number(key, v, expected, help)?;
+            if n == 0.0 {
+                this.error(
+                    v.span(),
+                    &format!("`{key}` must not be zero"),
+                    "a zero factor flattens the cell",
+                    Some(help),
+                );
+                return None;
+            }
+            Some(n)
+        };
+        let DeValue::Array(items) = value.get_ref() else {
+            return factor(self, value, "a number or an array of 3 numbers").map(|n| [n; 3]);
+        };
+        if items.len() != 3 {
+            self.three_values(key, value, items.len(), help);
+            return None;
+        }
+        let [x, y, z] = [&items[0], &items[1], &items[2]].map(|v| factor(self, v, "a number"));
+        Some([x?, y?, z?])
+    }
+
+    /// An array of exactly 3 finite numbers.
+    fn vec3(&mut self, key: &str, value: &Value<'_>, help: &str) -> Option<[f64; 3]> {
+        let DeValue::Array(items) = value.get_ref() else {
+            self.wrong_type(key, value, "an array of 3 numbers [x, y, z]", Some(help));
+            return None;
+        };
+        if items.len() != 3 {
+            self.three_values(key, value, items.len(), help);
+            return None;
+        }
+        let [x, y, z] = [&items[0], &items[1], &items[2]]
+            .map(|v| self.transform_number(key, v, "a number", help));
+        Some([x?, y?, z?])
+    }
+
+    fn three_values(&mut self, key: &str, value: &Value<'_>, len: usize, help: &str) {
+        self.error(
+            value.span(),
+            &format!("`{key}` must have 3 values (x, y, z)"),
+            &format!("found {len}"),
+            Some(help),
+        );
+    }
+
+    /// A finite number of a transform; each error has `help`.
+    fn transform_number(
+        &mut self,
+        key: &str,
+        value: &Value<'_>,
+        expected: &str,
+        help: &str,
+    ) -> Option<f64> {
+        match value.get_ref() {
+            DeValue::Integer(_) => {}
+            DeValue::Float(float) => {
+                if float.as_str().parse::<f64>().is_ok_and(|x| !x.is_finite()) {
+                    let shown = self.raw(value);
+                    self.error(
+                        value.span(),
+                        &format!("`{key}` must be a finite number"),
+                        &format!("found `{shown}`"),
+                        Some(help),
+                    );
+                    return None;
+                }
+            }
+            _ => {
+                self.wrong_type(key, value, expected, Some(help));
+                return None;
+            }
+        }
+        self.number(key, value, expected)
     }
 }

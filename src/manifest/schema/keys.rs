@@ -15,7 +15,7 @@ pub(super) const BUILD_KEYS: [&str; 3] = ["out_dir", "units", "report"];
 
 // `[cells.NAME]`.
 
-pub(super) const CELL_KEYS: [&str; 18] = [
+pub(super) const CELL_KEYS: [&str; 19] = [
     "tpms",
     "expr",
     "blend",
@@ -27,6 +27,7 @@ pub(super) const CELL_KEYS: [&str; 18] = [
     "species",
     "reconstruct",
     "ps",
+    "transform",
     "symmetry",
     "fit",
     "extend",
@@ -74,6 +75,11 @@ pub(super) const RECONSTRUCT_KEYS: [&str; 4] =
 pub(super) const PS_KEYS: [&str; 1] = ["terms"];
 
 pub(super) const TERM_KEYS: [&str; 3] = ["moment", "scale", "vector"];
+
+/// The parts of a `ps` or `crystal` cell's `transform`, in the order they apply.
+pub(super) const TRANSFORM_KEYS: [&str; 3] = ["scale", "rotate", "translate"];
+
+pub(super) const ROTATE_KEYS: [&str; 2] = ["axis", "angle"];
 
 // `[outputs.NAME]` over a box or a mesh, and their sizing.
 
@@ -213,6 +219,8 @@ mod tests {
         ("cells.*.reconstruct", &RECONSTRUCT_KEYS),
         ("cells.*.ps", &PS_KEYS),
         ("cells.*.ps.terms", &TERM_KEYS),
+        ("cells.*.transform", &TRANSFORM_KEYS),
+        ("cells.*.transform.rotate", &ROTATE_KEYS),
         ("outputs.*", &OUTPUT_KEYS),
         ("outputs.*.domain", &DOMAIN_KEYS),
         ("outputs.*", &SIZING_KEYS),

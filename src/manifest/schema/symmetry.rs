@@ -204,6 +204,8 @@ impl Checker<'_, '_, '_> {
         let is_crystal =
             matches!(source, Some((CellSource::Crystal(_), _))) || given.contains(&"crystal");
         let crystal_options = self.crystal_options(name, &fields, is_crystal);
+        let is_ps = matches!(source, Some((CellSource::Ps { .. }, _))) || given.contains(&"ps");
+        let transform = self.ps_transform(name, &fields, is_crystal || is_ps);
 
         if self.report.len() > before {
             return None;
@@ -217,6 +219,11 @@ impl Checker<'_, '_, '_> {
         }
         if let (CellSource::Crystal(crystal), Some(options)) = (&mut source, crystal_options) {
             options.apply(crystal);
+        }
+        match (&mut source, transform.flatten()) {
+            (CellSource::Crystal(crystal), Some(t)) => crystal.transform = Some(t),
+            (CellSource::Ps { transform, .. }, Some(t)) => *transform = Some(t),
+            _ => {}
         }
         let (references, combination) = match &source {
             CellSource::Blend { .. } | CellSource::Minkowski { .. } => {
