@@ -21,6 +21,7 @@
 //! | `rotate v θ` | `f(R x)`, R the Rodrigues matrix of v̂ and θ (eq. 5 as written, so the solid turns by −θ about v) |
 //! | `orient v` | the solid turned about `e3 × v` by `arccos(v3/\|v\|)` so that its z axis points along v: `f(Rᵀ x)` with `R e3 = v̂` |
 //! | `union`, `intersection`, `difference` | `min(f, g)`; `max(f, g)`; `max(f, −g)` |
+//! | `sigmoid-blend d x0 width` | `f + w·(g − f)`, `w = 1/(1 + exp(−(d̂·x − x0)/width))` (`blend.rs`) |
 //!
 //! Numeric arguments are expressions without coordinates (`1/2`, `pi/4`, `2^-3`), vectors are
 //! comma-separated in one word (`0,-2,0`).
@@ -51,6 +52,7 @@
 
 mod affine;
 mod args;
+mod blend;
 mod bounds;
 mod compile;
 mod error;
