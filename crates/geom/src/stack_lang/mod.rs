@@ -80,7 +80,7 @@ pub use sampler::{TILE_X, TILE_Y};
 pub use tree::{Node, Op, Tree};
 pub use words::{At, Origin, Word, quote, split_words, split_words_spanned};
 
-use crate::contour::{ContourError, contour};
+use crate::contour::{ContourError, Contouring, contour_with};
 use crate::field::{Grid, ScalarField};
 use crate::mesh::Mesh;
 
@@ -154,6 +154,17 @@ pub fn mesh_with_progress(
     counts: [usize; 3],
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<Mesh, ContourError> {
+    mesh_by(Contouring::Cubes, field, domain, counts, progress)
+}
+
+/// [`mesh_with_progress`] by the contouring `method`.
+pub fn mesh_by(
+    method: Contouring,
+    field: &ProgramField,
+    domain: &Aabb,
+    counts: [usize; 3],
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<Mesh, ContourError> {
     if counts.iter().any(|&n| n < 2) {
         return Err(ContourError::TooFewSamples(counts));
     }
@@ -171,7 +182,7 @@ pub fn mesh_with_progress(
     }
     let grid = Grid::spanning(domain.min, domain.max, counts);
     let sampler = field.sampler(&grid);
-    contour(sampler.as_ref(), &grid, progress)
+    contour_with(method, sampler.as_ref(), &grid, progress)
 }
 
 /// A coordinate as a reader wants it in a message: `1e308`, not 309 digits.
