@@ -46,10 +46,12 @@ enum Command {
                             Solids: ball, cylinder, box, tpms.NAME, expression FORMULA, file PATH. \
                             Unary: complement, offset R, shell T, move X,Y,Z, scale K or \
                             scale KX,KY,KZ, rotate AX,AY,AZ ANGLE, orient AX,AY,AZ. Binary: union, \
-                            intersection, difference. @FILE inserts the words of FILE.\n\n\
+                            intersection, difference, sigmoid-blend DX,DY,DZ X0 WIDTH (graded \
+                            from the first solid to the second along the direction). @FILE inserts the words of FILE.\n\n\
                             Options, anywhere among the words: -s SAMPLES (a total like 100^3, \
                             or NX,NY,NZ; default 60^3), -b X0,Y0,Z0,X1,Y1,Z1 (default: the \
                             solid's bounds), -o FILE (default out.ply; .stl .ply .obj .off .vtk), \
+                            --contour tetrahedra (marching tetrahedra; default cubes), \
                             -q (no summary), --allow-large (contour even a grid estimated \
                             to need more memory or disk than the machine has)."
     )]

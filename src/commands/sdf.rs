@@ -1,5 +1,5 @@
-//! `latticebuild sdf WORDS… [-s SAMPLES] [-b x0,y0,z0,x1,y1,z1] [-o out.ply]`: a Cesogen
-//! command line (paper §4.2) with the program name replaced.
+//! `latticebuild sdf WORDS… [-s SAMPLES] [-b x0,y0,z0,x1,y1,z1] [-o out.ply] [--contour
+//! tetrahedra]`: a Cesogen command line (paper §4.2) with the program name replaced.
 //!
 //! The arguments are read as Cesogen reads them: every `@FILE` is replaced by the
 //! whitespace-separated words of FILE (recursively, names relative to the including file),
@@ -7,7 +7,8 @@
 //! program. `-s` is one total number of samples (spread evenly over the axes: `130^3`) or
 //! three counts; `-b` the box, six numbers; `-o` the output file, `out.ply` by default, its
 //! format chosen by its extension. Without `-b` the box is the solid's bounds, with the paper's
-//! box rule where it is unbounded; without `-s`, 60³ samples.
+//! box rule where it is unbounded; without `-s`, 60³ samples. `--contour tetrahedra` contours
+//! by marching tetrahedra instead of marching cubes.
 //!
 //! Exit codes as for `build`: 0 written, 2 bad arguments or program, 1 nothing could be
 //! written. One summary line on stderr, like the build's.
@@ -24,6 +25,7 @@ use std::process::ExitCode;
 use std::sync::Arc;
 use std::time::Instant;
 
+use latticebuild_geom::contour::Contouring;
 use latticebuild_geom::mesh_io::{self, Encoding, Format};
 use latticebuild_geom::stack_lang::{
     self, Aabb, ExternalField, ExternalSolids, IncludeResolver, Included, Program, Word,
@@ -93,6 +95,8 @@ impl IncludeResolver for FileIncludes {
 /// The options of a command line and the words of its program.
 struct Options {
     samples: [usize; 3],
+    /// `--contour cubes|tetrahedra`
+    contouring: Contouring,
     domain: Option<Aabb>,
     output: PathBuf,
     quiet: bool,
@@ -109,6 +113,7 @@ impl Options {
     fn extract(words: Vec<Word>) -> Result<Options, Failure> {
         let mut options = Options {
             samples: stack_lang::DEFAULT_SAMPLES,
+            contouring: Contouring::Cubes,
             domain: None,
             output: PathBuf::from("out.ply"),
             quiet: false,
@@ -125,6 +130,7 @@ impl Options {
                 "-s" | "--samples" => "-s",
                 "-b" | "--bounds" => "-b",
                 "-o" | "--output" => "-o",
+                "--contour" => "--contour",
                 "-q" | "--quiet" => {
                     options.quiet = true;
                     continue;
@@ -153,6 +159,15 @@ impl Options {
             match name {
                 "-s" => options.samples = stack_lang::parse_samples(&value).map_err(bad)?,
                 "-b" => options.domain = Some(stack_lang::parse_box(&value).map_err(bad)?),
+                "--contour" => {
+                    options.contouring = Contouring::from_name(&value).ok_or_else(|| {
+                        usage(format_args!(
+                            "{} `--contour {value}`: expected `cubes` (marching cubes, the \
+                             default) or `tetrahedra` (marching tetrahedra)",
+                            word.origin
+                        ))
+                    })?;
+                }
                 _ => options.output = PathBuf::from(value),
             }
         }
@@ -164,6 +179,7 @@ fn example(flag: &str) -> &'static str {
     match flag {
         "-s" => "a total like `100^3` or three counts like `100,50,50`",
         "-b" => "six numbers `x0,y0,z0,x1,y1,z1`",
+        "--contour" => "`cubes` or `tetrahedra`",
         _ => "a file name like `out.stl`",
     }
 }
@@ -218,8 +234,14 @@ fn command(args: &[String]) -> Result<(), Failure> {
         }
     }
     let samples = |_: &Aabb| Ok(options.samples);
-    let contoured = contour_field(&field, Some(domain), &samples, &NoProgress)
-        .map_err(|e| Failure::Build(format!("{e}: `{shown}` was not written")))?;
+    let contoured = contour_field(
+        &field,
+        options.contouring,
+        Some(domain),
+        &samples,
+        &NoProgress,
+    )
+    .map_err(|e| Failure::Build(format!("{e}: `{shown}` was not written")))?;
     let (mesh, check, domain) = (&contoured.mesh, &contoured.check, &contoured.domain);
     write_user_file(&options.output, &mut |w| {
         mesh_io::write_mesh(mesh, format, Encoding::Binary, w)

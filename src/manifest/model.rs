@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 use std::ops::Range;
 use std::path::PathBuf;
 
+use latticebuild_geom::contour::Contouring;
 use latticebuild_geom::field::Solid;
 use latticebuild_geom::islands::IslandFilter;
 use latticebuild_geom::mesh_io::{Encoding, Format};
@@ -306,6 +307,8 @@ pub struct ProgramOutput {
     /// `bounds = { min, max }`; `None`: the program's own bounds, found when it is contoured.
     pub bounds: Option<[[f64; 3]; 2]>,
     pub resolution: ProgramResolution,
+    /// `contour = "cubes"` (the default) or `"tetrahedra"`.
+    pub contouring: Contouring,
     /// Formats to write, sorted and without duplicates.
     pub formats: Vec<Format>,
     pub encoding: Encoding,

@@ -3,14 +3,16 @@
 //! bytes into the mesh's signed distance, and [`contour_field`] finds the box and contours.
 //!
 //! Invariants:
-//! - The stage is a pure function of its program, box, resolution and the bytes of its `file`
-//!   meshes (its inputs, in the order of [`ProgramStage::files`]). Its key holds the program's
+//! - The stage is a pure function of its program, box, resolution, contouring method and the
+//!   bytes of its `file` meshes (its inputs, in the order of [`ProgramStage::files`]), all in
+//!   its key. The key holds the program's
 //!   canonical text with each path replaced by its input's number and extension, so renaming
 //!   or touching a mesh reruns nothing, while editing it does.
 //! - A solid with no surface in its box is an error, not an empty file.
 
 use std::sync::Arc;
 
+use latticebuild_geom::contour::Contouring;
 use latticebuild_geom::mesh::Mesh;
 use latticebuild_geom::mesh_read;
 use latticebuild_geom::mesh_sdf::{MeshSdf, SdfOptions};
@@ -49,10 +51,11 @@ pub struct Contoured {
     pub samples: [usize; 3],
 }
 
-/// Contours `field` over `bounds` (its own bounds, with the paper's box rule, when `None`) at
-/// the samples `samples` gives for that box.
+/// Contours `field` by `method` over `bounds` (its own bounds, with the paper's box rule, when
+/// `None`) at the samples `samples` gives for that box.
 pub fn contour_field(
     field: &ProgramField,
+    method: Contouring,
     bounds: Option<Aabb>,
     samples: &dyn Fn(&Aabb) -> Result<[usize; 3], StageError>,
     progress: &dyn StageProgress,
@@ -60,7 +63,7 @@ pub fn contour_field(
     let domain = bounds.unwrap_or_else(|| field.domain());
     let counts = samples(&domain)?;
     progress.phase("contouring");
-    let mesh = stack_lang::mesh_with_progress(field, &domain, counts, &|n| progress.advance(n))?;
+    let mesh = stack_lang::mesh_by(method, field, &domain, counts, &|n| progress.advance(n))?;
     if mesh.is_empty() {
         return Err(StageError::EmptySolid(format!(
             "the solid has no surface in the box {}",
@@ -94,6 +97,7 @@ pub struct ProgramStage {
     pub files: Vec<String>,
     pub bounds: Option<[[f64; 3]; 2]>,
     pub resolution: ProgramResolution,
+    pub contouring: Contouring,
 }
 
 /// The `file` words' meshes, from their inputs' bytes.
@@ -121,6 +125,7 @@ impl ProgramStage {
             files: output.files.iter().map(|f| f.given.clone()).collect(),
             bounds: output.bounds,
             resolution: output.resolution,
+            contouring: output.contouring,
         }
     }
 
@@ -148,6 +153,7 @@ impl ProgramStage {
             .param("bounds", bounds)
             .param("samples", Param::List(samples))
             .param("voxel", voxel)
+            .param("contour", self.contouring.name())
     }
 
     /// Progress steps of [`ProgramStage::run`] (cube layers), when known before it runs.
@@ -183,7 +189,7 @@ impl ProgramStage {
                 ))
             }),
         };
-        let contoured = contour_field(&field, bounds, &samples, progress)?;
+        let contoured = contour_field(&field, self.contouring, bounds, &samples, progress)?;
         Ok(MeshArtifact {
             summary: MeshSummary::from_check(&contoured.check)
                 .with_pieces(&validate::pieces(&contoured.mesh), false),

@@ -143,6 +143,11 @@ fn combinations() {
         },
     );
     assert_bounds(&format!("{pair} difference"), bounds("ball move -1,0,0"));
+    // A blend lies between its operands' values: inside only where one of them is.
+    assert_bounds(
+        &format!("{pair} sigmoid-blend 1,0,0 0 0.5"),
+        bounds(&format!("{pair} union")),
+    );
     // A TPMS is unbounded; intersected with a ball it has the ball's bounds (Figure 6).
     assert_bounds("tpms.gyroid", Aabb::EVERYTHING);
     assert_bounds(
@@ -217,6 +222,8 @@ fn bounds_contain_their_solids() {
          intersection",
         "ball scale 0.5,1,1.5 offset 0.2 complement offset -0.5 complement",
         "box scale 0.7 move 0.5,0,0 rotate 0,1,0 1 orient 1,-1,2",
+        "ball move -1,0,0 box scale 0.5 move 1,0.5,0 sigmoid-blend 1,0.2,0 0.1 0.3 complement \
+         offset 0.2 complement rotate 0,0,1 0.5",
     ];
     for program in programs {
         let p = Program::parse_str(program).unwrap();

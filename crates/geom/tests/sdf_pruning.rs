@@ -23,7 +23,7 @@ fn field(program: &str, pruning: bool) -> ProgramField {
     f
 }
 
-const PROGRAMS: [(&str, Option<&str>); 5] = [
+const PROGRAMS: [(&str, Option<&str>); 6] = [
     (
         "ball scale 5 tpms.p scale 4 tpms.d scale 3.75 tpms.gyroid scale 1.25 intersection \
          intersection intersection",
@@ -40,6 +40,11 @@ const PROGRAMS: [(&str, Option<&str>); 5] = [
         None,
     ),
     ("tpms.neovius scale 0.3 file part.stl intersection", None),
+    (
+        "tpms.gyroid offset 0.3 tpms.p scale 0.5 sigmoid-blend 0,0,1 0 0.2 ball scale 1.5 \
+         intersection",
+        None,
+    ),
     (
         "ball scale 0.1 move 2,0,0 box scale 0.2 move -2,1,0 union",
         Some("-3,-3,-3,3,3,3"),
@@ -64,7 +69,7 @@ fn pruning_never_changes_the_mesh() {
 #[test]
 fn pruning_replaces_values_far_from_the_surface_only() {
     // Two tiny solids in a big box: most tiles are provably outside.
-    let (program, domain) = PROGRAMS[4];
+    let (program, domain) = PROGRAMS[5];
     let domain = stack_lang::parse_box(domain.unwrap()).unwrap();
     let grid = Grid::spanning(domain.min, domain.max, [90, 90, 90]);
     let (exact, pruned) = (field(program, false), field(program, true));

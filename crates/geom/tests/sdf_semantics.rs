@@ -214,6 +214,51 @@ fn arguments_are_expressions() {
     let _ = PI;
 }
 
+/// The gyroid `C_x S_y + C_y S_z + C_z S_x` and P `C_x + C_y + C_z` of period 1, by hand.
+fn gyroid(p: [f64; 3]) -> f64 {
+    let (c, s) = (|v: f64| (2.0 * PI * v).cos(), |v: f64| (2.0 * PI * v).sin());
+    c(p[0]) * s(p[1]) + c(p[1]) * s(p[2]) + c(p[2]) * s(p[0])
+}
+
+fn schwarz_p(p: [f64; 3]) -> f64 {
+    p.iter().map(|&v| (2.0 * PI * v).cos()).sum()
+}
+
+/// `f g sigmoid-blend d x0 width`: `f` far on the −d side, `g` far on the +d side, their
+/// average on the plane `d̂·x = x0`, and the logistic weight in between.
+#[test]
+fn sigmoid_blend_grades_between_two_solids() {
+    let f = field("tpms.gyroid tpms.p sigmoid-blend 1,0,0 0 0.1");
+    let points = [[0.13, 0.71, -0.4], [0.0, 0.25, 0.3], [0.37, -0.05, 0.9]];
+    for q in points {
+        // 30 widths away the weight is e^-30 ≈ 1e-13 from its limit.
+        let far_low = [q[0] - 3.0, q[1], q[2]];
+        let far_high = [q[0] + 3.0, q[1], q[2]];
+        assert!((f.eval(far_low) - gyroid(far_low)).abs() < 1e-11);
+        assert!((f.eval(far_high) - schwarz_p(far_high)).abs() < 1e-11);
+        let mid = [0.0, q[1], q[2]];
+        let average = 0.5 * (gyroid(mid) + schwarz_p(mid));
+        assert!((f.eval(mid) - average).abs() < 1e-12);
+        // One width past the plane: w = 1/(1 + e^-1).
+        let one = [0.1, q[1], q[2]];
+        let w = 1.0 / (1.0 + (-1.0f64).exp());
+        let want = (1.0 - w) * gyroid(one) + w * schwarz_p(one);
+        assert!((f.eval(one) - want).abs() < 1e-12);
+    }
+    // The direction is made a unit vector, and the blend moves with what follows it: the plane
+    // x0 = 0.5 of `2,0,0` lies at world x = 1.5 after `move 1,0,0`; `scale 2` doubles lengths
+    // and values.
+    check(
+        "ball box sigmoid-blend 2,0,0 0.5 0.25 move 1,0,0",
+        &[([1.5, 0.2, 0.0], 0.5 * (0.29f64.sqrt() - 1.0 - 0.5))],
+    );
+    let scaled = field("tpms.gyroid tpms.p sigmoid-blend 0,0,1 0.5 0.1 scale 2");
+    let at = [0.3, -0.2, 1.0];
+    let half = at.map(|v| v / 2.0);
+    let want = 2.0 * 0.5 * (gyroid(half) + schwarz_p(half));
+    assert!((scaled.eval(at) - want).abs() < 1e-12);
+}
+
 /// The grid sampler (separable tables, tiles) agrees with point evaluation, with pruning off;
 /// with pruning on, every sample keeps its sign.
 #[test]
@@ -224,6 +269,8 @@ fn sampler_agrees_with_points() {
         "tpms.gyroid rotate 1,2,3 0.4 scale 0.7 ball scale 2 move 0.1,0,0 intersection",
         "box expression \"sin(3*x)*y - z\" offset 0.1 union cylinder orient 1,1,0 difference",
         "tpms.iwp scale 0.5,0.8,1.3 offset 0.3 shell 0.4 complement",
+        "tpms.gyroid tpms.p offset 0.5 sigmoid-blend 1,1,0 0.2 0.3 scale 1.5 ball scale 1.8 \
+         intersection",
     ];
     let grid = Grid::spanning([-2.1, -1.9, -2.0], [2.0, 2.2, 1.7], [45, 38, 41]);
     let [nx, ny, nz] = grid.counts;

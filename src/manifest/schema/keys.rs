@@ -83,10 +83,11 @@ pub(super) const ROTATE_KEYS: [&str; 2] = ["axis", "angle"];
 
 // `[outputs.NAME]` over a box or a mesh, and their sizing.
 
-pub(super) const OUTPUT_KEYS: [&str; 21] = [
+pub(super) const OUTPUT_KEYS: [&str; 22] = [
     "cell",
     "sdf",
     "bounds",
+    "contour",
     "over",
     "domain",
     "cell_size",
@@ -180,7 +181,7 @@ const STRING_KEYS: [(&[&str], &[&str]); 6] = [
     (
         &["outputs", "*"],
         &[
-            "cell", "sdf", "over", "solid", "path", "within", "scaffold", "keep",
+            "cell", "sdf", "over", "solid", "path", "within", "scaffold", "keep", "contour",
         ],
     ),
     (&["outputs", "*", "cell"], &["by"]),

@@ -1,5 +1,6 @@
 //! The schema of SDF outputs: `sdf = "…"`, a program in the Cesogen stack language
-//! (`latticebuild_geom::stack_lang`), with `bounds`, `samples` or `voxel`, and the write keys.
+//! (`latticebuild_geom::stack_lang`), with `bounds`, `samples` or `voxel`, `contour`, and the
+//! write keys.
 //!
 //! A child of `schema.rs` (it extends its `Checker`). Invariants:
 //! - An output has `cell` or `sdf`, never both; the keys of cell outputs (`domain`, `solid`,
@@ -16,6 +17,8 @@ use std::collections::BTreeMap;
 use std::ops::Range;
 use std::path::PathBuf;
 
+use latticebuild_geom::contour::Contouring;
+use latticebuild_geom::spelling;
 use latticebuild_geom::stack_lang::{self as lang, Op, Origin, Program, ProgramError, Word};
 use toml::de::DeValue;
 
@@ -71,6 +74,9 @@ const CELL_OUTPUT_KEYS: [(&str, &str, &str); 9] = [
     ),
 ];
 
+/// The values of `contour`.
+const CONTOURINGS: [&str; 2] = ["cubes", "tetrahedra"];
+
 /// Whether an output table holds an `sdf` program (and is checked by [`Checker::sdf_output`]).
 pub(super) fn is_sdf_output(value: &Value<'_>) -> bool {
     matches!(value.get_ref(), DeValue::Table(t) if t.keys().any(|k| k.get_ref() == "sdf"))
@@ -117,6 +123,10 @@ impl Checker<'_, '_, '_> {
             Some((_, v)) => self.sdf_bounds(&path("bounds"), v).map(Some),
         };
         let resolution = self.sdf_resolution(name, &within, &fields, bounds.flatten());
+        let contouring = match fields.get("contour") {
+            None => Some(Contouring::Cubes),
+            Some((_, v)) => self.contouring(&path("contour"), v),
+        };
         let written = self.written_files(name, &fields);
         let islands = self.islands(name, &fields, false);
         if self.report.len() > before {
@@ -130,6 +140,7 @@ impl Checker<'_, '_, '_> {
             files,
             bounds: bounds?,
             resolution: resolution?,
+            contouring: contouring?,
             formats: written.formats,
             encoding: written.encoding,
             stem: written.stem,
@@ -137,8 +148,41 @@ impl Checker<'_, '_, '_> {
         })
     }
 
-    /// `bounds` of a cell output: an error, since cells fill a `domain`.
+    /// `contour = "cubes"` or `"tetrahedra"`.
+    fn contouring(&mut self, key: &str, value: &Value<'_>) -> Option<Contouring> {
+        let text = self.string(key, value)?;
+        if let Some(method) = Contouring::from_name(text) {
+            return Some(method);
+        }
+        let help = match spelling::closest(text, CONTOURINGS) {
+            Some(close) => format!("did you mean `\"{close}\"`?"),
+            None => "`\"cubes\"` (the default) is marching cubes; `\"tetrahedra\"` marching \
+                     tetrahedra"
+                .to_string(),
+        };
+        self.error(
+            value.span(),
+            &format!("unknown value `{text}` for `{key}`"),
+            "expected \"cubes\" or \"tetrahedra\"",
+            Some(&help),
+        );
+        None
+    }
+
+    /// `bounds` and `contour` of a cell output: errors, since cells fill a `domain` and are
+    /// contoured by marching cubes only.
     pub(super) fn sdf_only_keys(&mut self, output: &str, fields: &Fields<'_, '_>) {
+        if let Some((key, _)) = fields.get("contour") {
+            self.error(
+                key.span(),
+                &format!("`outputs.{output}.contour` applies only to `sdf` outputs"),
+                "cell outputs are contoured by marching cubes only",
+                Some(
+                    "remove `contour`, or write the solid as an `sdf` program (`sdf = \
+                     \"tpms.gyroid offset 0.3\"`) to contour it with tetrahedra",
+                ),
+            );
+        }
         if let Some((key, _)) = fields.get("bounds") {
             self.error(
                 key.span(),

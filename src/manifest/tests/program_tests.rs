@@ -3,12 +3,20 @@
 
 use super::*;
 use crate::manifest::{ProgramResolution, voxel_samples};
+use latticebuild_geom::contour::Contouring;
 
-pub(super) const SDF_ERR_CASES: &[ErrCase] = &[ErrCase {
-    name: "program errors at their words, cell keys beside `sdf`, samples, bounds, quotes, escapes",
-    manifest: "[outputs.a]\nsdf = \"ball intersection\"\nsamples = \"1\"\n\n[outputs.b]\nsdf = \"ball scal 2 @more.txt\"\ncell = \"g\"\nsolid = \"shell\"\n\n[outputs.c]\nsdf = 'expression \"x + * y\"'\nbounds = { min = [0, 0], max = [1, -1, 1] }\n\n[outputs.d]\nsdf = \"tpms.gyroid scale 1/0 \\\"oops\"\nvoxel = 0.1\nsamples = 3\n\n[outputs.e]\nsdf = \"ball \\u0062all union extra\"\n",
-    sets: &["outputs.f.sdf=tpms.p file part.step intersection"],
-}];
+pub(super) const SDF_ERR_CASES: &[ErrCase] = &[
+    ErrCase {
+        name: "program errors at their words, cell keys beside `sdf`, samples, bounds, quotes, escapes",
+        manifest: "[outputs.a]\nsdf = \"ball intersection\"\nsamples = \"1\"\n\n[outputs.b]\nsdf = \"ball scal 2 @more.txt\"\ncell = \"g\"\nsolid = \"shell\"\n\n[outputs.c]\nsdf = 'expression \"x + * y\"'\nbounds = { min = [0, 0], max = [1, -1, 1] }\n\n[outputs.d]\nsdf = \"tpms.gyroid scale 1/0 \\\"oops\"\nvoxel = 0.1\nsamples = 3\n\n[outputs.e]\nsdf = \"ball \\u0062all union extra\"\n",
+        sets: &["outputs.f.sdf=tpms.p file part.step intersection"],
+    },
+    ErrCase {
+        name: "contour methods (unknown, misspelt, beside a cell) and sigmoid blend arguments",
+        manifest: "[cells.g]\ntpms = \"gyroid\"\n\n[outputs.a]\nsdf = \"ball\"\ncontour = \"tetrahedron\"\n\n[outputs.b]\nsdf = \"ball\"\ncontour = \"dual\"\n\n[outputs.c]\ncell = \"g\"\ndomain = { min = [0, 0, 0], max = [1, 1, 1] }\nsamples = 8\ncontour = \"tetrahedra\"\n\n[outputs.d]\nsdf = \"ball box sigmoid-blend 0,0,0 0 1\"\n\n[outputs.e]\nsdf = \"ball box sigmoid-blend 1,0,0 0 -1/2\"\n",
+        sets: &[],
+    },
+];
 
 #[test]
 fn invalid_sdf_manifests_render_exactly() {
@@ -36,8 +44,14 @@ fn an_sdf_output_is_parsed_with_its_files_and_defaults() {
     assert_eq!(out.files[0].span.start, text.len());
     assert_eq!(out.files[0].span.len(), "meshes/part.STL".len());
     assert_eq!(out.bounds, None);
-    // Cesogen's default: 60³ samples.
+    // Cesogen's default: 60³ samples, by marching cubes.
     assert_eq!(out.resolution, ProgramResolution::Counts([60; 3]));
+    assert_eq!(out.contouring, Contouring::Cubes);
+    let tets = parse_ok(
+        "[outputs.t]\nsdf = \"ball\"\ncontour = \"tetrahedra\"\n",
+        &[],
+    );
+    assert_eq!(tets.program_outputs["t"].contouring, Contouring::Tetrahedra);
     assert_eq!(
         manifest.inputs,
         [std::path::PathBuf::from("./meshes/part.STL")]

@@ -45,6 +45,8 @@
 mod chunk;
 pub(crate) use chunk::{apart_in_f32, band_crossing, band_fraction, crossing_fraction, spans_band};
 pub mod table;
+mod tetra;
+pub use tetra::contour_tetrahedra;
 
 use rayon::prelude::*;
 
@@ -88,6 +90,49 @@ pub enum ContourError {
         /// The two coordinates, as bits (keeping the error `Eq`).
         at_bits: [u64; 2],
     },
+}
+
+/// How a solid is contoured.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Contouring {
+    /// Marching cubes (this module): fewer triangles, chunked in parallel.
+    #[default]
+    Cubes,
+    /// Marching tetrahedra ([`contour_tetrahedra`]): six tetrahedra per cube, no tables.
+    Tetrahedra,
+}
+
+impl Contouring {
+    /// The name a manifest or command line gives it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Contouring::Cubes => "cubes",
+            Contouring::Tetrahedra => "tetrahedra",
+        }
+    }
+
+    /// The method named `name` (`cubes`, `tetrahedra`), if any.
+    pub fn from_name(name: &str) -> Option<Contouring> {
+        match name {
+            "cubes" => Some(Contouring::Cubes),
+            "tetrahedra" => Some(Contouring::Tetrahedra),
+            _ => None,
+        }
+    }
+}
+
+/// Contours the solid `{g < 0}` with the method asked for (see [`contour`],
+/// [`contour_tetrahedra`]).
+pub fn contour_with(
+    method: Contouring,
+    sampler: &dyn PlaneSampler,
+    model: &Grid,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<Mesh, ContourError> {
+    match method {
+        Contouring::Cubes => contour(sampler, model, progress),
+        Contouring::Tetrahedra => contour_tetrahedra(sampler, model, progress),
+    }
 }
 
 /// Cube layers per chunk: about 32 chunks whatever the size, bounded so small grids still
@@ -328,3 +373,5 @@ fn assemble(mut chunks: Vec<ChunkMesh>) -> Result<Mesh, ContourError> {
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tetra_tests;

@@ -7,9 +7,9 @@ use super::*;
 use crate::field::{Band, Grid, PlaneSampler};
 
 /// Samples a precomputed array, or a closure of the model position.
-struct FnSampler<F: Fn([f64; 3]) -> f64 + Sync> {
-    grid: Grid,
-    f: F,
+pub(super) struct FnSampler<F: Fn([f64; 3]) -> f64 + Sync> {
+    pub(super) grid: Grid,
+    pub(super) f: F,
 }
 
 impl<F: Fn([f64; 3]) -> f64 + Sync> PlaneSampler for FnSampler<F> {
@@ -30,13 +30,13 @@ impl<F: Fn([f64; 3]) -> f64 + Sync> PlaneSampler for FnSampler<F> {
     }
 }
 
-fn run(grid: Grid, f: impl Fn([f64; 3]) -> f64 + Sync) -> Mesh {
+pub(super) fn run(grid: Grid, f: impl Fn([f64; 3]) -> f64 + Sync) -> Mesh {
     contour(&FnSampler { grid, f }, &grid, &|_| {}).expect("contour")
 }
 
 /// Independent closedness check: every directed edge appears once and its reverse once, and
 /// the triangles around every vertex form one cycle. Returns the Euler characteristic.
-fn assert_closed_manifold(mesh: &Mesh) -> i64 {
+pub(super) fn assert_closed_manifold(mesh: &Mesh) -> i64 {
     let mut directed: HashMap<(u32, u32), u32> = HashMap::new();
     for t in &mesh.triangles {
         assert!(
@@ -89,7 +89,7 @@ fn assert_closed_manifold(mesh: &Mesh) -> i64 {
     mesh.vertices.len() as i64 - edges + mesh.triangles.len() as i64
 }
 
-fn volume(mesh: &Mesh) -> f64 {
+pub(super) fn volume(mesh: &Mesh) -> f64 {
     let p = |i: u32| mesh.vertices[i as usize].map(f64::from);
     mesh.triangles
         .iter()
@@ -104,7 +104,7 @@ fn volume(mesh: &Mesh) -> f64 {
 }
 
 /// A cheap, reproducible hash of a lattice point to [-1, 1).
-fn noise(i: i64, j: i64, k: i64, seed: u64) -> f64 {
+pub(super) fn noise(i: i64, j: i64, k: i64, seed: u64) -> f64 {
     let mut h = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
         ^ (j as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
         ^ (k as u64).wrapping_mul(0x1656_67B1_9E37_79F9)
@@ -240,7 +240,7 @@ fn run_band(grid: Grid, band: Band, f: impl Fn([f64; 3]) -> f64 + Sync) -> BandM
 }
 
 /// A TPMS of the library over one period, sampled by its compiled expression.
-fn tpms(name: &str) -> crate::expr::CompiledExpr {
+pub(super) fn tpms(name: &str) -> crate::expr::CompiledExpr {
     crate::expr::compile(crate::tpms::lookup(name).expect("surface").formula).expect("formula")
 }
 

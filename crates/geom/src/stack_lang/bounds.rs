@@ -9,7 +9,8 @@
 //! for both), point transformations map the child's box back (`move δ` shifts it by δ, `scale
 //! k` multiplies it by k, `rotate` and `orient` take the box of its turned corners), union
 //! takes the union of the boxes of its operands' sublevel sets and intersection their
-//! intersection (and the other way round for superlevel sets).
+//! intersection (and the other way round for superlevel sets); a sigmoid blend, lying between
+//! its operands' values, takes the union of their boxes for either level set.
 //!
 //! Leaves: the ball's `{f ≤ t}` is the ball of radius `1 + t` (empty below −1), the box's the
 //! box of half-width `1 + t`, the cylinder's is unbounded along z; the superlevel sets of
@@ -197,7 +198,12 @@ pub fn solid_bounds(tree: &Tree, external: &dyn Fn(usize) -> ExternalBounds) -> 
                     });
                 }
                 (
-                    Op::Move(_) | Op::Rotate { .. } | Op::Orient(_) | Op::Union | Op::Intersection,
+                    Op::Move(_)
+                    | Op::Rotate { .. }
+                    | Op::Orient(_)
+                    | Op::Union
+                    | Op::Intersection
+                    | Op::SigmoidBlend { .. },
                     q,
                 ) => {
                     asked[a].push(q);
@@ -272,6 +278,9 @@ pub fn solid_bounds(tree: &Tree, external: &dyn Fn(usize) -> ExternalBounds) -> 
                     .image(&next(a)),
                 // The child is evaluated at Rᵀ x, so x lies in R(child's box).
                 Op::Orient(v) => Affine::turning_z_to(*v).image(&next(a)),
+                // A convex combination of f and g is ≤ t only where one of them is, and ≥ t
+                // only where one of them is.
+                Op::SigmoidBlend { .. } => next(a).union(&next(b)),
                 Op::Union | Op::Intersection | Op::Difference => {
                     let (left, right) = (next(a), next(b));
                     let widens = match (&node.op, q) {

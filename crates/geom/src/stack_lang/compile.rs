@@ -8,19 +8,21 @@
 //! formula has one (axis-aligned scalings and moves of TPMS keep theirs; a rotated TPMS
 //! usually gains a longer one through the angle-addition formulas). What remains above the
 //! leaves acts on values only: `a·v + c` (complement, offset, isotropic scale, merged when
-//! consecutive), the sign-dependent factor of eq. 4, `|v| − h` (shell), min, max and
-//! `max(a, −b)` (difference).
+//! consecutive), the sign-dependent factor of eq. 4, `|v| − h` (shell), min, max,
+//! `max(a, −b)` (difference) and the sigmoid blend `a + w·(b − a)`, whose weight `w` is a
+//! formula leaf of its own pushed after its two operands.
 //!
 //! Invariants:
 //! - The plan computes the tree's function: each leaf is the leaf's formula at the composed
 //!   point map, and the value operations are the tree's value semantics in post-order.
 //! - `subtree_start[i]` is the first operation of the subtree ending at operation `i` (its
-//!   operations are contiguous in post-order), so a binary operation's right operand is the
-//!   subtree ending at `i − 1` and its left operand the one ending just before that starts.
+//!   operations are contiguous in post-order), so an operation's last operand is the subtree
+//!   ending at `i − 1` and each earlier one the subtree ending just before the next starts.
 
 use std::sync::Arc;
 
 use super::affine::Affine;
+use super::blend;
 use super::external::ExternalField;
 use super::tree::{Op, Tree};
 use crate::expr::{BinOp, CompiledExpr, Expr, Func, Var};
@@ -59,6 +61,8 @@ pub(crate) enum ValueOp {
     Max,
     /// `max(a, −b)`
     Difference,
+    /// `a + w·(b − a)` of the three values on top, `w` the last (`blend.rs`).
+    Blend,
 }
 
 impl ValueOp {
@@ -66,6 +70,7 @@ impl ValueOp {
         match self {
             ValueOp::Leaf(_) => 0,
             ValueOp::Min | ValueOp::Max | ValueOp::Difference => 2,
+            ValueOp::Blend => 3,
             _ => 1,
         }
     }
@@ -155,6 +160,16 @@ impl Plan {
                 Op::Union => ValueOp::Min,
                 Op::Intersection => ValueOp::Max,
                 Op::Difference => ValueOp::Difference,
+                Op::SigmoidBlend {
+                    direction,
+                    x0,
+                    width,
+                } => {
+                    let w = blend::weight(&maps[n], *direction, *x0, *width);
+                    plan.leaves.push(Leaf::Formula(CompiledExpr::from_expr(&w)));
+                    plan.push(ValueOp::Leaf(plan.leaves.len() - 1));
+                    ValueOp::Blend
+                }
                 // Point transformations are already in the leaves' maps.
                 _ => continue,
             };
@@ -182,14 +197,11 @@ impl Plan {
             };
             return;
         }
-        let start = match op.arity() {
-            0 => self.ops.len(),
-            1 => self.subtree_start[self.ops.len() - 1],
-            _ => {
-                let right = self.subtree_start[self.ops.len() - 1];
-                self.subtree_start[right - 1]
-            }
-        };
+        // Each operand's subtree ends just before the next one's starts.
+        let mut start = self.ops.len();
+        for _ in 0..op.arity() {
+            start = self.subtree_start[start - 1];
+        }
         self.ops.push(op);
         self.subtree_start.push(start);
     }

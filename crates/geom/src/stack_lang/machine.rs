@@ -5,11 +5,13 @@
 //! - Every operation is one tight loop over the block (at most [`BLOCK`] values), with no
 //!   allocation and no branch on the operation inside the loop, so the loops vectorize.
 //! - [`Step`]s only ever skip work whose result is provably not used: an operand of a min or
-//!   max that cannot win anywhere in the block. With every step [`Step::Run`] the machine
-//!   computes the plan exactly; with skips it computes bit-identical values.
+//!   max that cannot win anywhere in the block (a blend needs all its operands). With every
+//!   step [`Step::Run`] the machine computes the plan exactly; with skips it computes
+//!   bit-identical values.
 //! - The interval evaluation follows the same operations and encloses every value the block
 //!   can produce (see `interval.rs`).
 
+use super::blend;
 use super::compile::{Plan, ValueOp};
 use super::interval::Interval;
 
@@ -79,6 +81,15 @@ pub fn run<'s>(
                     *v = v.abs() - half;
                 }
             }
+            ValueOp::Blend => {
+                let (lower, upper) = stack.data.split_at_mut((top - 2) * BLOCK);
+                let a = &mut lower[(top - 3) * BLOCK..(top - 3) * BLOCK + n];
+                let (b, w) = upper.split_at(BLOCK);
+                for ((u, &v), &t) in a.iter_mut().zip(&b[..n]).zip(&w[..n]) {
+                    *u = blend::value(*u, v, t);
+                }
+                top -= 2;
+            }
             ValueOp::Min | ValueOp::Max | ValueOp::Difference => match step {
                 Step::Left => {}
                 Step::Right => {
@@ -127,6 +138,12 @@ pub fn intervals(plan: &Plan, leaves: &[Interval], out: &mut Vec<Interval>) {
                 r
             }
             ValueOp::Shell { half } => out[i - 1].abs().sub(Interval::point(half)),
+            ValueOp::Blend => {
+                let w = out[i - 1];
+                let b_end = plan.subtree_start[i - 1] - 1;
+                let a = out[plan.subtree_start[b_end] - 1];
+                blend::interval(a, out[b_end], w)
+            }
             ValueOp::Min | ValueOp::Max | ValueOp::Difference => {
                 let b = out[i - 1];
                 let a = out[plan.subtree_start[i - 1] - 1];
@@ -158,6 +175,14 @@ pub fn plan_steps(plan: &Plan, values: &[Interval], steps: &mut Vec<Step>) -> bo
         match op.arity() {
             0 => {}
             1 => steps[i - 1] = Step::Run,
+            3 => {
+                // A blend needs all three operands everywhere.
+                let mut end = i - 1;
+                for _ in 0..3 {
+                    steps[end] = Step::Run;
+                    end = plan.subtree_start[end].wrapping_sub(1);
+                }
+            }
             _ => {
                 let right = i - 1;
                 let left = plan.subtree_start[right] - 1;

@@ -21,6 +21,7 @@
 //! | `rotate v θ` | `f(R x)`, R the Rodrigues matrix of v̂ and θ (eq. 5 as written, so the solid turns by −θ about v) |
 //! | `orient v` | the solid turned about `e3 × v` by `arccos(v3/\|v\|)` so that its z axis points along v: `f(Rᵀ x)` with `R e3 = v̂` |
 //! | `union`, `intersection`, `difference` | `min(f, g)`; `max(f, g)`; `max(f, −g)` |
+//! | `sigmoid-blend d x0 width` | `f + w·(g − f)`, `w = 1/(1 + exp(−(d̂·x − x0)/width))` (`blend.rs`) |
 //!
 //! Numeric arguments are expressions without coordinates (`1/2`, `pi/4`, `2^-3`), vectors are
 //! comma-separated in one word (`0,-2,0`).
@@ -51,6 +52,7 @@
 
 mod affine;
 mod args;
+mod blend;
 mod bounds;
 mod compile;
 mod error;
@@ -78,7 +80,7 @@ pub use sampler::{TILE_X, TILE_Y};
 pub use tree::{Node, Op, Tree};
 pub use words::{At, Origin, Word, quote, split_words, split_words_spanned};
 
-use crate::contour::{ContourError, contour};
+use crate::contour::{ContourError, Contouring, contour_with};
 use crate::field::{Grid, ScalarField};
 use crate::mesh::Mesh;
 
@@ -152,6 +154,17 @@ pub fn mesh_with_progress(
     counts: [usize; 3],
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<Mesh, ContourError> {
+    mesh_by(Contouring::Cubes, field, domain, counts, progress)
+}
+
+/// [`mesh_with_progress`] by the contouring `method`.
+pub fn mesh_by(
+    method: Contouring,
+    field: &ProgramField,
+    domain: &Aabb,
+    counts: [usize; 3],
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<Mesh, ContourError> {
     if counts.iter().any(|&n| n < 2) {
         return Err(ContourError::TooFewSamples(counts));
     }
@@ -169,7 +182,7 @@ pub fn mesh_with_progress(
     }
     let grid = Grid::spanning(domain.min, domain.max, counts);
     let sampler = field.sampler(&grid);
-    contour(sampler.as_ref(), &grid, progress)
+    contour_with(method, sampler.as_ref(), &grid, progress)
 }
 
 /// A coordinate as a reader wants it in a message: `1e308`, not 309 digits.

@@ -4,7 +4,8 @@
 //! solid; unary words (`complement`, `offset ξ`, `shell Ξ`, `move v`, `scale k` or `scale v`,
 //! `rotate v θ`, `orient v`) replace the solid on top with a modified one and read their
 //! arguments from the words to their right; binary words (`union`, `intersection`,
-//! `difference`) pop two solids and push their combination. At the end exactly one solid must
+//! `difference`, and `sigmoid-blend d x0 width` with its arguments to its right) pop two
+//! solids and push their combination. At the end exactly one solid must
 //! remain. Words are matched without regard to case.
 //!
 //! Invariants:
@@ -31,10 +32,13 @@ pub const UNARY_WORDS: [&str; 7] = [
     "orient",
 ];
 /// Words that combine the two solids on top of the stack.
-pub const BINARY_WORDS: [&str; 3] = ["union", "intersection", "difference"];
+pub const BINARY_WORDS: [&str; 4] = ["union", "intersection", "difference", "sigmoid-blend"];
 
 /// Names from other tools, and the word they mean here.
-const SYNONYMS: [(&str, &str); 12] = [
+const SYNONYMS: [(&str, &str); 15] = [
+    ("blend", "sigmoid-blend"),
+    ("grade", "sigmoid-blend"),
+    ("sigmoid", "sigmoid-blend"),
     ("sphere", "ball"),
     ("cube", "box"),
     ("translate", "move"),
@@ -269,11 +273,51 @@ impl<'w> Parser<'w> {
             "union" => Op::Union,
             "intersection" => Op::Intersection,
             "difference" => Op::Difference,
+            "sigmoid-blend" => self.sigmoid_blend(word)?,
             _ => return Err(unknown(word)),
         };
         let children = self.pop(arity);
         self.push(op, children, at);
         Ok(())
+    }
+}
+
+impl<'w> Parser<'w> {
+    /// The arguments of `sigmoid-blend`: a direction (made a unit vector, so that the
+    /// position and width are lengths), the position of the transition along it, its width.
+    fn sigmoid_blend(&mut self, word: &'w Word) -> Result<Op, ProgramError> {
+        const WORD: &str = "sigmoid-blend";
+        let direction = self.read(word, WORD, "a direction dx,dy,dz (not 0,0,0)", |t| {
+            let v = args::vector3(t)?;
+            let length = v.iter().map(|c| c * c).sum::<f64>().sqrt();
+            if length == 0.0 || !length.is_finite() {
+                return Err(format!("`{t}` has no direction"));
+            }
+            Ok(v.map(|c| c / length))
+        })?;
+        let x0 = self.read(
+            word,
+            WORD,
+            "the position of the transition along the direction, after it",
+            args::constant,
+        )?;
+        let width = self.read(
+            word,
+            WORD,
+            "a transition width greater than 0, after the position",
+            |t| {
+                let v = args::constant(t)?;
+                if v <= 0.0 {
+                    return Err(format!("`{t}` is {v}, not greater than 0"));
+                }
+                Ok(v)
+            },
+        )?;
+        Ok(Op::SigmoidBlend {
+            direction,
+            x0,
+            width,
+        })
     }
 }
 
@@ -296,7 +340,8 @@ fn unknown(word: &Word) -> ProgramError {
             Some(s) => format!("; did you mean `{s}`?"),
             None => "; expected a solid (`ball`, `cylinder`, `box`, `tpms.NAME`, `expression`, \
                      `file`) or an operation (`complement`, `offset`, `shell`, `move`, `scale`, \
-                     `rotate`, `orient`, `union`, `intersection`, `difference`)"
+                     `rotate`, `orient`, `union`, `intersection`, `difference`, \
+                     `sigmoid-blend`)"
                 .to_string(),
         }
     };

@@ -10,7 +10,7 @@
 //!   but the root is the child of exactly one node.
 //! - Arguments are stored as the values they evaluate to, already checked (finite, non-zero
 //!   scale factors, non-negative shell thickness, non-zero rotation axis, orientation axis off
-//!   the negative z half-axis).
+//!   the negative z half-axis, a unit blend direction, a positive blend width).
 //! - [`Tree::canonical`] is itself a program that parses back to a tree with the same
 //!   canonical text; two programs with equal canonical text compute the same function.
 
@@ -58,6 +58,13 @@ pub enum Op {
     Intersection,
     /// `max(f, −g)` (eq. 11).
     Difference,
+    /// `(1 − w) f + w g` with the sigmoid weight `w = 1/(1 + exp(−(d̂·x − x0)/width))` along
+    /// the unit direction d̂ (a heterogeneous solid, graded from f to g; `blend.rs`).
+    SigmoidBlend {
+        direction: [f64; 3],
+        x0: f64,
+        width: f64,
+    },
 }
 
 impl Op {
@@ -70,7 +77,7 @@ impl Op {
             | Op::Tpms(_)
             | Op::Expression { .. }
             | Op::File(_) => 0,
-            Op::Union | Op::Intersection | Op::Difference => 2,
+            Op::Union | Op::Intersection | Op::Difference | Op::SigmoidBlend { .. } => 2,
             _ => 1,
         }
     }
@@ -153,6 +160,17 @@ impl Tree {
                 Op::Union => write!(out, "union"),
                 Op::Intersection => write!(out, "intersection"),
                 Op::Difference => write!(out, "difference"),
+                Op::SigmoidBlend {
+                    direction,
+                    x0,
+                    width,
+                } => write!(
+                    out,
+                    "sigmoid-blend {} {} {}",
+                    vector(direction),
+                    number(*x0),
+                    number(*width)
+                ),
             };
         }
         out
