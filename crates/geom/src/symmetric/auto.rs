@@ -71,11 +71,12 @@ pub fn fit_auto(
     max_n: usize,
 ) -> Result<AutoFit, FitError> {
     let d = group.dimension();
-    if !(tolerance.is_finite() && tolerance > 0.0)
-        || !max_n.is_power_of_two()
-        || max_n < 2 * AUTO_START_N
-        || check_n(max_n, d).is_err()
-    {
+    let options_ok = tolerance.is_finite()
+        && tolerance > 0.0
+        && max_n.is_power_of_two()
+        && max_n >= 2 * AUTO_START_N
+        && check_n(max_n, d).is_ok();
+    if !options_ok {
         return Err(FitError::AutoOptions {
             tolerance,
             max_n,
