@@ -37,6 +37,7 @@ use crate::graph::{Graph, NodeId};
 use crate::progress::Progress;
 use crate::stages::chunked::{ChunkedMesh, ChunkedWriter, is_chunked};
 use crate::stages::islands::{IslandsFailure, IslandsStage};
+use crate::stages::symmetric::FittedPayload;
 use crate::stages::tile::TileOutput;
 use crate::stages::write::{MeshInput, WriteError};
 use crate::stages::{
@@ -67,6 +68,10 @@ pub struct OutputResult {
     pub written: WrittenOutput,
     /// The runs of the nodes this output depends on, in graph order.
     pub stages: Vec<NodeRun>,
+    /// What the stages before the write found worth saying (an automatic N that stopped at
+    /// `max_n` short of its tolerance), read from their payloads, so a cached build says it
+    /// too.
+    pub warnings: Vec<String>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -220,13 +225,39 @@ impl<'a> Builder<'a> {
                 .iter()
                 .filter_map(|id| self.runs.get(id).cloned())
                 .collect();
+            let mut warnings = Vec::new();
+            for &id in &chain {
+                warnings.extend(self.fit_warning(id)?);
+            }
             results.push(OutputResult {
                 name: name.clone(),
                 written: (*written).clone(),
                 stages,
+                warnings,
             });
         }
         Ok(results)
+    }
+
+    /// The warning of an automatic-N fit node that stopped short of its tolerance (its small
+    /// payload is loaded for it); `None` for every other node.
+    fn fit_warning(&mut self, id: NodeId) -> Result<Option<String>, BuildError> {
+        match &self.graph.nodes[id].stage {
+            Stage::Fit(fit) if !fit.reads_samples() => {}
+            _ => return Ok(None),
+        }
+        let mut ignore = |_: Key, _: Arc<MeshArtifact>, _: ContentHash| {};
+        self.load(id, &mut ignore)?;
+        let Some(Value::Bytes(bytes)) = self.resolved.get(&id).and_then(|r| r.value.clone()) else {
+            return Ok(None);
+        };
+        let node = &self.graph.nodes[id].name;
+        let cell = node.strip_prefix("fit:").unwrap_or(node).to_string();
+        Ok(FittedPayload::from_bytes(&bytes)
+            .ok()
+            .and_then(|p| p.auto)
+            .and_then(|a| a.warning())
+            .map(|w| format!("cell `{cell}`: {w}")))
     }
 
     /// Builds node `id` and what it needs, and returns its payload (for `latticebuild cell`).

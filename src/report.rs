@@ -82,7 +82,8 @@ pub struct Report {
     /// Closed voids sealed inside the solid.
     pub cavities: u64,
     /// What the build found worth saying about this output: more than one piece, a wall
-    /// thinner than [`ShellSummary::THIN_WALL`] sample spacings.
+    /// thinner than [`ShellSummary::THIN_WALL`] sample spacings, an automatic N that stopped
+    /// at `max_n` short of its tolerance.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
     pub bbox: Bbox,
@@ -160,6 +161,7 @@ impl Report {
                         .and_then(|s| fraction_warning(s, volume_fraction, within)),
                 )
                 .chain(measures.into_iter().flat_map(measure_warnings))
+                .chain(result.warnings.iter().cloned())
                 .collect(),
             wall_thickness: measures.and_then(|m| m.wall_thickness),
             pore_size: measures.and_then(|m| m.pore_size),

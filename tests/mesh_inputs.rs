@@ -215,3 +215,50 @@ fn the_example_struts_are_one_connected_body() {
     };
     assert_eq!(validate::components(&mesh), 1);
 }
+
+/// `n = "auto"` that cannot meet its tolerance by `max_n` builds with the fit at `max_n` and
+/// warns, naming the movement reached and the tolerance, on a cached rebuild too; one that
+/// meets it does not warn.
+#[test]
+fn an_automatic_n_stopped_at_max_n_is_a_warning_not_a_failure() {
+    let (stl, _) = sphere_stl(0.3, [0.0; 3], 16, 32);
+    let p = Project::new(
+        r#"
+[cells.ball]
+mesh = "ball.stl"
+symmetry = "Oh"
+fit = { n = "auto", tolerance = 1e-9, max_n = 64 }
+
+[outputs.ball]
+cell = "ball"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+samples = 33
+"#,
+    );
+    p.write("ball.stl", &stl);
+    for _ in 0..2 {
+        let r = &p.build(&[])[0];
+        assert_eq!(r["watertight"], true, "{r}");
+        let warnings: Vec<&str> = r["warnings"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .filter_map(|w| w.as_str())
+            .collect();
+        assert!(
+            warnings.iter().any(|w| w.contains("cell `ball`")
+                && w.contains("max_n = 64")
+                && w.contains("from N = 32 to N = 64")
+                && w.contains("tolerance 1.0e-9")),
+            "{warnings:?}"
+        );
+    }
+    let r = &p.build(&["--set", "cells.ball.fit.tolerance=1"])[0];
+    let warned = r["warnings"].as_array().into_iter().flatten();
+    assert!(
+        !warned
+            .filter_map(|w| w.as_str())
+            .any(|w| w.contains("max_n")),
+        "{r}"
+    );
+}

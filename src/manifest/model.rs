@@ -255,8 +255,9 @@ pub enum GroupSpec {
 pub enum FitResolution {
     /// Samples per axis of the sampling domain (even, ≥ 4).
     Fixed(usize),
-    /// Double N from 32 until the fitted zero set moves less than `tolerance` (cell units).
-    Auto { tolerance: f64 },
+    /// Double N from 32 until the fitted zero set moves less than `tolerance` (cell units),
+    /// at most up to `max_n` (a power of two, at least 64, within the group's limit).
+    Auto { tolerance: f64, max_n: usize },
 }
 
 #[derive(Clone, Debug, PartialEq)]

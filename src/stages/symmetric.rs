@@ -86,6 +86,40 @@ pub struct FittedPayload {
     /// `[fx, fy, fz, re, im]` per representative frequency, sorted by frequency.
     pub coefficients: Vec<(i32, i32, i32, f64, f64)>,
     pub constraint: Option<ConstraintSummary>,
+    /// With `n = "auto"`: how N was chosen (absent otherwise, so fixed-N payloads keep their
+    /// bytes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub auto: Option<AutoSummary>,
+}
+
+/// How `n = "auto"` chose N: the movement of the surface from `n` to `2n` (or from
+/// `max_n / 2` to `max_n` when the tolerance was not met by `max_n`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AutoSummary {
+    pub n: usize,
+    pub movement: f64,
+    pub tolerance: f64,
+    pub max_n: usize,
+    pub converged: bool,
+}
+
+impl AutoSummary {
+    /// The report's warning when the tolerance was not met, naming both numbers.
+    pub fn warning(&self) -> Option<String> {
+        (!self.converged).then(|| {
+            format!(
+                "automatic N stopped at max_n = {}: the fitted surface still moved {:.2e} cell \
+                 units from N = {} to N = {}, above the tolerance {:.1e}; the fit at N = {} is \
+                 used (raise `max_n` or loosen `tolerance` to meet it)",
+                self.max_n,
+                self.movement,
+                self.max_n / 2,
+                self.max_n,
+                self.tolerance,
+                self.max_n
+            )
+        })
+    }
 }
 
 impl FittedPayload {
@@ -100,6 +134,7 @@ impl FittedPayload {
                 .map(|c| (c.f[0], c.f[1], c.f[2], c.c.re, c.c.im))
                 .collect(),
             constraint,
+            auto: None,
         }
     }
 
@@ -191,8 +226,9 @@ impl FitStage {
         let key = key.param("group", group_param(&self.spec.group));
         match self.spec.n {
             FitResolution::Fixed(n) => key.param("n", n as u64),
-            FitResolution::Auto { tolerance } => key
+            FitResolution::Auto { tolerance, max_n } => key
                 .param("tolerance", tolerance)
+                .param("max_n", max_n as u64)
                 .param("mirror", self.spec.mirror)
                 .param("symmetrize", self.spec.symmetrize),
         }
@@ -205,29 +241,35 @@ impl FitStage {
 
     pub fn run(&self, input: &[u8]) -> Result<Vec<u8>, StageError> {
         let group = group_of(&self.spec.group)?;
-        let cell = match self.spec.n {
+        match self.spec.n {
             FitResolution::Fixed(_) => {
                 let (n, samples) = decode_samples(input)?;
                 let scale = samples.iter().fold(0.0f64, |m, v| m.max(v.abs()));
                 let cell = fit_samples(&group, n, &samples)?;
                 check_surface(&cell, scale)?;
-                cell
+                Ok(FittedPayload::new(&cell, &self.spec, None).to_bytes())
             }
-            FitResolution::Auto { tolerance } => {
+            FitResolution::Auto { tolerance, max_n } => {
                 let field = super::cell::cell_field(input)?;
                 let options = FitOptions {
                     sample: sample_options(&self.spec),
                     check_vanishing: true,
                 };
-                symmetric::fit_auto(&group, &field, &options, tolerance, max_n(&group))?.0
+                // Not meeting the tolerance by `max_n` is the report's warning, not an error:
+                // the finest fit is the best there is, and the user chose the bound.
+                let found = symmetric::fit_auto(&group, &field, &options, tolerance, max_n)?;
+                let mut payload = FittedPayload::new(&found.cell, &self.spec, None);
+                payload.auto = Some(AutoSummary {
+                    n: found.n,
+                    movement: found.movement,
+                    tolerance,
+                    max_n,
+                    converged: found.converged,
+                });
+                Ok(payload.to_bytes())
             }
-        };
-        Ok(FittedPayload::new(&cell, &self.spec, None).to_bytes())
+        }
     }
-}
-
-fn max_n(group: &Group) -> usize {
-    if group.dimension() == 3 { 256 } else { 4096 }
 }
 
 /// `blend` and `minkowski`: combinations of fitted cells of one group.

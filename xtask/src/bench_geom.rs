@@ -1,4 +1,4 @@
-//! `cargo xtask bench geom [expr|mesh-io|periodic|scaffold|symmetric|validate|constrain|measure]…`:
+//! `cargo xtask bench geom [expr|mesh-io|periodic|scaffold|symmetric|auto-mesh|validate|constrain|measure]…`:
 //! timings of the geometry crate's kernels, printed with their targets (what used to be the
 //! `#[ignore]`d `*_timing` tests of `crates/geom/tests`). No names: all of them.
 //!
@@ -21,6 +21,7 @@ const ALL: &[(&str, Bench)] = &[
     ("periodic", periodic),
     ("scaffold", scaffold),
     ("symmetric", symmetric),
+    ("auto-mesh", auto_mesh),
     ("validate", validate),
     ("constrain", constrain),
     ("measure", measure),
@@ -397,6 +398,60 @@ fn symmetric() -> Result<(), String> {
         },
     )?;
     println!("({} terms, checksum {sampled:.3})", rich.term_count());
+    Ok(())
+}
+
+/// `n = "auto"` on the shipped mesh cell (`examples/meshes/cross.obj`, the example's
+/// `smooth_cross`: Oh, default tolerance 1e-3 and max_n 256): nested sampling against fitting
+/// every size from scratch, which must choose the same N. Target: ≤ 20 s on 2 cores (it was
+/// 389 s of wall time in the build before nesting and spectral gradients).
+fn auto_mesh() -> Result<(), String> {
+    use latticebuild_geom::mesh_read::read_auto;
+    use latticebuild_geom::mesh_sdf::{Mode, PeriodicMeshSdf, SdfOptions};
+    use latticebuild_geom::symmetric::{FitOptions, Group, fit, fit_auto, surface_movement};
+
+    let path = super::root().join("examples/meshes/cross.obj");
+    let bytes = std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let soup = read_auto(&bytes, Some("obj")).map_err(|e| format!("{e:?}"))?;
+    let (group, options, tolerance, max_n) = (Group::oh(), FitOptions::default(), 1e-3, 256);
+    for mode in [Mode::SignedDistance, Mode::Containment] {
+        let sdf = PeriodicMeshSdf::new(
+            &soup,
+            SdfOptions {
+                mode,
+                ..SdfOptions::default()
+            },
+        )
+        .map_err(|e| format!("{e:?}"))?;
+        let start = Instant::now();
+        let found = fit_auto(&group, &sdf, &options, tolerance, max_n)
+            .map_err(|e| format!("fit_auto: {e:?}"))?;
+        let nested = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        let mut n = 32;
+        let mut coarse = fit(&group, n, &sdf, &options).map_err(|e| format!("{e:?}"))?;
+        let mut movement = f64::INFINITY;
+        while 2 * n <= max_n {
+            let fine = fit(&group, 2 * n, &sdf, &options).map_err(|e| format!("{e:?}"))?;
+            movement = surface_movement(&coarse, &fine).map_err(|e| format!("{e:?}"))?;
+            if movement < tolerance {
+                break;
+            }
+            (coarse, n) = (fine, 2 * n);
+        }
+        let scratch = start.elapsed().as_secs_f64();
+        println!(
+            "cross.obj {mode:?}: N = {} ({}converged, movement {:.2e}); nested {nested:.2} s \
+             (target ≤ 20 s), every size from scratch {scratch:.2} s",
+            found.n,
+            if found.converged { "" } else { "NOT " },
+            found.movement,
+        );
+        ensure(found.n == n && found.movement == movement, || {
+            format!("nested chose N = {}, from scratch N = {n}", found.n)
+        })?;
+        ensure(nested < 4.0 * 20.0, || format!("{nested} s"))?;
+    }
     Ok(())
 }
 

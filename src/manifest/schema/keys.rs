@@ -61,7 +61,7 @@ pub(super) const SYMMETRIC_KEYS: [&str; 6] = [
 /// The keys of [`SYMMETRIC_KEYS`] that concern sampling a source, so not a combination.
 pub(super) const SAMPLING_KEYS: [&str; 2] = ["extend", "symmetrize"];
 
-pub(super) const FIT_KEYS: [&str; 2] = ["n", "tolerance"];
+pub(super) const FIT_KEYS: [&str; 3] = ["n", "tolerance", "max_n"];
 
 pub(super) const GENERATOR_KEYS: [&str; 2] = ["generators", "dimension"];
 

@@ -49,6 +49,11 @@ const MAX_FIT_N_3D: usize = 512;
 const DEFAULT_FIT_N_2D: usize = 256;
 const DEFAULT_FIT_N_3D: usize = 128;
 const DEFAULT_TOLERANCE: f64 = 1e-3;
+/// `n = "auto"` stops doubling here unless `max_n` says otherwise.
+const DEFAULT_MAX_N_2D: usize = 4096;
+const DEFAULT_MAX_N_3D: usize = 256;
+/// The smallest `max_n`: automatic N starts at 32 and needs two sizes to compare.
+const MIN_MAX_N: i64 = 64;
 
 /// A valid group with the way it was written.
 #[derive(Clone)]
@@ -78,11 +83,14 @@ struct Reference {
     span: Range<usize>,
 }
 
-/// `fit.n` as written, kept until the group (and so the largest allowed N) is known.
+/// `fit.n` (and `fit.max_n`) as written, kept until the group (and so the largest allowed
+/// N) is known.
 struct FitDraft {
     resolution: FitResolution,
     n_span: Range<usize>,
     n_raw: String,
+    /// `max_n` when given: its value, span and text.
+    max_n: Option<(usize, Range<usize>, String)>,
 }
 
 /// A cell whose table is valid on its own; its references are not resolved yet.
@@ -620,7 +628,8 @@ impl Checker<'_, '_, '_> {
 
     fn fit(&mut self, cell: &str, value: &Value<'_>) -> Option<FitDraft> {
         let key = format!("cells.{cell}.fit");
-        let help = "write `fit = { n = 64 }` or `fit = { n = \"auto\", tolerance = 1e-3 }`";
+        let help =
+            "write `fit = { n = 64 }` or `fit = { n = \"auto\", tolerance = 1e-3, max_n = 256 }`";
         let table = self.table(&key, value, help)?;
         let within = format!("in `{key}`");
         let fields = self.fields(table, &FIT_KEYS, &within);
@@ -657,20 +666,31 @@ impl Checker<'_, '_, '_> {
             }
         };
         let tolerance = fields.get("tolerance").map(|(k, v)| (*k, *v));
+        let max_n_field = fields.get("max_n").map(|(k, v)| (*k, *v));
+        let mut max_n = None;
         let resolution = if auto {
             let tolerance = match tolerance {
                 None => DEFAULT_TOLERANCE,
                 Some((_, v)) => self.positive_number(&format!("{key}.tolerance"), v, "a number")?,
             };
-            FitResolution::Auto { tolerance }
+            if let Some((_, v)) = max_n_field {
+                max_n = Some(self.max_n(&format!("{key}.max_n"), v)?);
+            }
+            // The group's default bound is set once the group is known (`finish`).
+            FitResolution::Auto {
+                tolerance,
+                max_n: max_n.as_ref().map_or(0, |m| m.0),
+            }
         } else {
-            if let Some((k, _)) = tolerance {
-                self.error(
-                    k.span(),
-                    &format!("`{key}.tolerance` applies only to `n = \"auto\"`"),
-                    &format!("`n` is fixed at `{n_raw}`"),
-                    Some("remove `tolerance`, or set `n = \"auto\"`"),
-                );
+            for (name, field) in [("tolerance", tolerance), ("max_n", max_n_field)] {
+                if let Some((k, _)) = field {
+                    self.error(
+                        k.span(),
+                        &format!("`{key}.{name}` applies only to `n = \"auto\"`"),
+                        &format!("`n` is fixed at `{n_raw}`"),
+                        Some(&format!("remove `{name}`, or set `n = \"auto\"`")),
+                    );
+                }
             }
             let value = self.integer(&nkey, n, "an even integer or `\"auto\"`")?;
             if value < MIN_FIT_N || value % 2 != 0 {
@@ -685,11 +705,35 @@ impl Checker<'_, '_, '_> {
             // Beyond any group's limit; the limit of this cell's group is checked later.
             FitResolution::Fixed(usize::try_from(value).unwrap_or(usize::MAX))
         };
-        tolerance.is_none_or(|_| auto).then_some(FitDraft {
+        (auto || tolerance.is_none() && max_n_field.is_none()).then_some(FitDraft {
             resolution,
             n_span: n.span(),
             n_raw,
+            max_n,
         })
+    }
+
+    /// `fit.max_n`: a power of two, at least [`MIN_MAX_N`] (the group's upper limit is
+    /// checked in `finish`).
+    fn max_n(&mut self, key: &str, value: &Value<'_>) -> Option<(usize, Range<usize>, String)> {
+        let raw = self.raw(value);
+        let v = self.integer(key, value, "a power of two, like `max_n = 256`")?;
+        let v = usize::try_from(v).ok().filter(|&v| v >= MIN_MAX_N as usize);
+        match v {
+            Some(v) if v.is_power_of_two() => Some((v, value.span(), raw)),
+            _ => {
+                self.error(
+                    value.span(),
+                    &format!("`{key}` must be a power of two, at least {MIN_MAX_N}"),
+                    &format!("found `{raw}`"),
+                    Some(
+                        "automatic N doubles from 32, so it can stop at 64, 128, 256, 512 (and \
+                         up to 8192 for a 2D group)",
+                    ),
+                );
+                None
+            }
+        }
     }
 
     /// `extend`: whether the extended domain is filled by mirroring.
@@ -1130,8 +1174,37 @@ impl Checker<'_, '_, '_> {
                 } else {
                     (DEFAULT_FIT_N_3D, MAX_FIT_N_3D)
                 };
+                let default_max_n = if dimension == 2 {
+                    DEFAULT_MAX_N_2D
+                } else {
+                    DEFAULT_MAX_N_3D
+                };
                 let n = match &draft.fit {
                     None => FitResolution::Fixed(default),
+                    Some(FitDraft {
+                        resolution: FitResolution::Auto { tolerance, .. },
+                        max_n,
+                        ..
+                    }) => {
+                        if let Some((value, span, raw)) = max_n
+                            && *value > max
+                        {
+                            let key = format!("cells.{}.fit.max_n", draft.name.text);
+                            self.error(
+                                span.clone(),
+                                &format!("`{key}` must be at most {max} for a {dimension}D group"),
+                                &format!("found `{raw}`"),
+                                Some(&format!(
+                                    "the fit samples N^{dimension} points; {max} is the largest grid"
+                                )),
+                            );
+                            return None;
+                        }
+                        FitResolution::Auto {
+                            tolerance: *tolerance,
+                            max_n: max_n.as_ref().map_or(default_max_n, |m| m.0),
+                        }
+                    }
                     Some(fit) => {
                         if let FitResolution::Fixed(n) = fit.resolution
                             && n > max

@@ -35,6 +35,11 @@ pub(super) const SYM_ERR_CASES: &[ErrCase] = &[
         sets: &[],
     },
     ErrCase {
+        name: "max_n not a power of two, too large, below 64 and with a fixed n",
+        manifest: "[cells.a]\ntpms = \"p\"\nsymmetry = \"Oh\"\nfit = { n = \"auto\", max_n = 100 }\n\n[cells.b]\ntpms = \"p\"\nsymmetry = \"Oh\"\nfit = { n = \"auto\", max_n = 1024 }\n\n[cells.c]\nexpr = \"x\"\nsymmetry = \"D4\"\nfit = { n = \"auto\", max_n = 32 }\n\n[cells.d]\ntpms = \"p\"\nsymmetry = \"Oh\"\nfit = { n = 64, max_n = 128 }\n",
+        sets: &[],
+    },
+    ErrCase {
         name: "fit and other keys without symmetry",
         manifest: "[cells.a]\ntpms = \"p\"\nfit = { n = 64 }\ninvert = true\n",
         sets: &[],
@@ -162,7 +167,7 @@ fn every_symmetric_key_given_explicitly() {
 [cells.bone]
 tpms = \"gyroid\"
 symmetry = \"Td\"
-fit = { n = \"auto\", tolerance = 2e-4 }
+fit = { n = \"auto\", tolerance = 2e-4, max_n = 128 }
 extend = \"none\"
 symmetrize = true
 normal_to_faces = true
@@ -184,7 +189,10 @@ fit = { n = 8192 }
         manifest.cells["bone"].symmetric,
         Some(Symmetric {
             group: named("Td"),
-            n: FitResolution::Auto { tolerance: 2e-4 },
+            n: FitResolution::Auto {
+                tolerance: 2e-4,
+                max_n: 128,
+            },
             mirror: false,
             symmetrize: true,
             normal_to_faces: true,
@@ -193,7 +201,13 @@ fit = { n = 8192 }
         })
     );
     let n = |name: &str| manifest.cells[name].symmetric.as_ref().map(|s| s.n);
-    assert_eq!(n("auto"), Some(FitResolution::Auto { tolerance: 1e-3 }));
+    assert_eq!(
+        n("auto"),
+        Some(FitResolution::Auto {
+            tolerance: 1e-3,
+            max_n: 256,
+        })
+    );
     assert_eq!(n("big"), Some(FitResolution::Fixed(8192)));
 }
 
@@ -285,7 +299,13 @@ blend = { cells = [\"flat\"], weights = [2] }
             cells: ["mix".into(), "p".into()],
         }
     );
-    let mut expected = symmetric(named("Oh"), FitResolution::Auto { tolerance: 1e-3 });
+    let mut expected = symmetric(
+        named("Oh"),
+        FitResolution::Auto {
+            tolerance: 1e-3,
+            max_n: 256,
+        },
+    );
     expected.invert = true;
     assert_eq!(sum.symmetric, Some(expected));
     assert_eq!(
@@ -364,7 +384,13 @@ fn symmetric_keys_can_be_set_from_the_command_line() {
             "outputs.e.samples=16",
         ],
     );
-    let mut expected = symmetric(named("Td"), FitResolution::Auto { tolerance: 1e-3 });
+    let mut expected = symmetric(
+        named("Td"),
+        FitResolution::Auto {
+            tolerance: 1e-3,
+            max_n: 256,
+        },
+    );
     expected.mirror = false;
     assert_eq!(manifest.cells["gyroid"].symmetric, Some(expected));
     let out = &manifest.outputs["e"];

@@ -134,6 +134,12 @@ impl OriginPhase {
     }
 }
 
+/// The largest `N` a group of dimension `d` is fitted on. Memory: the half-spectrum alone is
+/// 8·N^d bytes (1 GiB at 512³, 512 MiB at 8192²).
+pub fn max_grid_n(dimension: usize) -> usize {
+    if dimension == 3 { 512 } else { 8192 }
+}
+
 /// Checks a grid size: even and at least 4, and not absurdly large.
 pub(crate) fn check_n(n: usize, dimension: usize) -> Result<(), FitError> {
     if n < 4 {
@@ -142,8 +148,7 @@ pub(crate) fn check_n(n: usize, dimension: usize) -> Result<(), FitError> {
     if !n.is_multiple_of(2) {
         return Err(FitError::Odd(n));
     }
-    // Memory: the half-spectrum alone is 8·N^d bytes (1 GiB at 512³, 512 MiB at 8192²).
-    let limit = if dimension == 3 { 512 } else { 8192 };
+    let limit = max_grid_n(dimension);
     if n > limit {
         return Err(FitError::TooLarge { n, limit });
     }
@@ -292,6 +297,73 @@ impl<'a> PlaneSource<'a> {
                 }
             }
         }
+        self.check_finite(k, out)
+    }
+
+    /// Writes plane `k` (even) of this grid into `out`, taking the points it shares with the
+    /// half-size grid (both indices even) from that grid's plane `k/2` (`coarse`) and
+    /// evaluating only the others: rows of odd `j` whole (by the grid sampler when there is
+    /// one), odd `i` of the even rows point by point. The values are those
+    /// [`sample_plane`](Self::sample_plane) gives, as the nested grid's coordinates are the
+    /// same numbers (`2i/2N = i/N` exactly) and the mirror regions are decided on integers
+    /// that scale with the grid.
+    pub(crate) fn refine_plane(
+        &self,
+        k: usize,
+        coarse: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), FitError> {
+        let n = self.n;
+        let half = n / 2;
+        debug_assert!(k.is_multiple_of(2) && coarse.len() == half * half && out.len() == n * n);
+        let is_tri_mirror = |i: usize, j: usize| self.mirror_tri && i + j > n;
+        let mut pts = Points::default();
+        let mut idx = Vec::new();
+        for j in 0..n {
+            let row = j * n..(j + 1) * n;
+            if j % 2 == 0 {
+                for i in 0..n {
+                    if i % 2 == 0 {
+                        out[i + n * j] = coarse[i / 2 + half * (j / 2)];
+                    } else if !is_tri_mirror(i, j) {
+                        idx.push(i + n * j);
+                        pts.push(self.eval_point(i, j, k));
+                    }
+                }
+            } else if let Some(sampler) = &self.sampler {
+                sampler.sample_rows(k, j..j + 1, &mut out[row]);
+                // The sampler saw the tetrahedron's corners unmirrored.
+                for i in (0..n).filter(|&i| self.mirror_tet && tet_corner(i, j, k, n).is_some()) {
+                    idx.push(i + n * j);
+                    pts.push(self.eval_point(i, j, k));
+                }
+            } else {
+                for i in (0..n).filter(|&i| !is_tri_mirror(i, j)) {
+                    idx.push(i + n * j);
+                    pts.push(self.eval_point(i, j, k));
+                }
+            }
+        }
+        let mut vals = vec![0.0; idx.len()];
+        self.evaluate(&pts, &mut vals);
+        for (p, v) in idx.into_iter().zip(vals) {
+            out[p] = v;
+        }
+        if self.mirror_tri {
+            for j in 0..n {
+                for i in 0..n {
+                    if is_tri_mirror(i, j) {
+                        out[i + n * j] = out[(n - j) + n * (n - i)];
+                    }
+                }
+            }
+        }
+        self.check_finite(k, out)
+    }
+
+    /// Fails with [`FitError::NonFinite`] at the first non-finite value of plane `k`.
+    fn check_finite(&self, k: usize, out: &[f64]) -> Result<(), FitError> {
+        let n = self.n;
         if let Some(p) = out.iter().position(|v| !v.is_finite()) {
             let (i, j) = (p % n, p / n);
             let frame = self.group.domain().frame();

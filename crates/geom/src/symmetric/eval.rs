@@ -228,12 +228,32 @@ impl FittedCell {
     /// `Φ` on the `N^d` grid `s_i = x_0 + i/N` of the group's domain (domain coordinates,
     /// x fastest), by inverse FFT of the full coefficient set. `N` must be even and ≥ 4.
     pub fn grid(&self, n: usize) -> Result<Vec<f64>, FitError> {
+        self.spectral_grid(n, None)
+    }
+
+    /// `∂Φ/∂s_axis` (domain coordinates; [`Frame::gradient_to_cartesian`] turns the `d` of
+    /// them into a Cartesian gradient) on the grid of [`grid`](Self::grid), exact at its
+    /// points like it: the term of frequency `k` gains the factor `2πi k_axis`, with `k` the
+    /// true frequency, not the folded one.
+    pub fn derivative_grid(&self, n: usize, axis: usize) -> Result<Vec<f64>, FitError> {
+        self.spectral_grid(n, Some(axis.min(2)))
+    }
+
+    fn spectral_grid(&self, n: usize, derivative: Option<usize>) -> Result<Vec<f64>, FitError> {
         let d = self.group.dimension();
         check_n(n, d)?;
         let phase = OriginPhase::new(self.group.domain());
         let mut spectrum = Spectrum::zeros(n, d);
+        let factor = |k: [i32; 3]| match derivative {
+            Some(a) => Complex64::new(0.0, std::f64::consts::TAU * f64::from(k[a])),
+            None => Complex64::new(1.0, 0.0),
+        };
         if n >= self.n {
             self.fill_spectrum_by_gather(&mut spectrum, &phase);
+            // In band, every stored k is the true frequency (|k_a| < N_fit/2 ≤ N/2).
+            if derivative.is_some() {
+                spectrum.map_with_frequency(factor);
+            }
             return Ok(spectrum.inverse());
         }
         // A coarser grid than the fit's folds frequencies: scatter every term instead.
@@ -261,7 +281,10 @@ impl FittedCell {
                     }
                     let k0 = t[0][0] * f[0] + t[0][1] * f[1] + t[0][2] * f[2];
                     let k2 = t[2][0] * f[0] + t[2][1] * f[1] + t[2][2] * f[2];
-                    let v = w * phase.at([k0, k1, k2]).conj();
+                    let mut v = w * phase.at([k0, k1, k2]).conj();
+                    if derivative.is_some() {
+                        v *= factor([k0, k1, k2]);
+                    }
                     let z = |k: i32| if dim == 3 { wrap(k, n) } else { 0 };
                     let xp = wrap(k0, n);
                     if owns(yp) && xp <= half {

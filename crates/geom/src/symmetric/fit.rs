@@ -101,18 +101,12 @@ pub enum FitError {
         relative: f64,
     },
     #[error(
-        "automatic N: the tolerance must be finite and positive, and max_n at least 64 (two sizes to compare); got tolerance {tolerance}, max_n {max_n}"
+        "automatic N: the tolerance must be finite and positive, and max_n a power of two from 64 to {limit} (two sizes to compare); got tolerance {tolerance}, max_n {max_n}"
     )]
-    AutoOptions { tolerance: f64, max_n: usize },
-    #[error(
-        "automatic N: the surface still moved {movement:.3e} (cell units) from N = {n} to N = {}, above the tolerance {tolerance:.3e}; raise max_n (now {max_n}) or loosen the tolerance",
-        2 * n
-    )]
-    AutoNotConverged {
+    AutoOptions {
         tolerance: f64,
         max_n: usize,
-        n: usize,
-        movement: f64,
+        limit: usize,
     },
 }
 

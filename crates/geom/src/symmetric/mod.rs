@@ -18,7 +18,8 @@
 //! - [`constrain`] — the face-normal constraint `∇Φ·n = 0` on the reference element's faces
 //!   (docs/method.md §Face-normal condition): a least-change projection of the coefficients
 //!   (`row_space.rs`: LSQR on the sparse constraint rows).
-//! - [`auto`] — automatic `N`: double until the zero set moves less than a tolerance.
+//! - [`auto`] — automatic `N`: double until the zero set moves less than a tolerance,
+//!   sampling only the points each doubling adds.
 //! - `fft` (private) — realfft along x (contiguous), rustfft along y and z, rayon across
 //!   planes and rows.
 //!
@@ -46,10 +47,10 @@ pub mod group;
 mod row_space;
 mod sampler;
 
-pub use auto::{AUTO_START_N, PROBE_N, fit_auto, surface_movement};
+pub use auto::{AUTO_START_N, AutoFit, PROBE_N, fit_auto, surface_movement};
 pub use blend::{minkowski_difference, minkowski_sum, weighted_average};
 pub use constrain::{CONSTRAINT_TOLERANCE, ConstraintReport, FACE_SAMPLES};
-pub use domain::{Extend, FnSource, SampleOptions, Source, from_fn, sample};
+pub use domain::{Extend, FnSource, SampleOptions, Source, from_fn, max_grid_n, sample};
 pub use eval::PRUNE_TOLERANCE;
 pub use fit::{
     Coefficient, FitError, FitOptions, FittedCell, Side, check_surface, fit, fit_samples,
