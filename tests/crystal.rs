@@ -218,3 +218,232 @@ samples = 61
         assert!(ran.iter().any(|s| s == stage), "{stage} not in {ran:?}");
     }
 }
+
+/// The `crystal` command's JSON `terms` as a model.
+fn model_of(terms: &[serde_json::Value]) -> latticebuild_geom::periodic::PsModel {
+    let number = |v: &serde_json::Value| v.as_f64().expect("number");
+    latticebuild_geom::periodic::PsModel::new(
+        terms
+            .iter()
+            .map(|t| {
+                let v: Vec<f64> = t["vector"]
+                    .as_array()
+                    .expect("vector")
+                    .iter()
+                    .map(number)
+                    .collect();
+                latticebuild_geom::periodic::PsTerm {
+                    moment: number(&t["moment"]),
+                    scale: number(&t["scale"]),
+                    vector: [v[0], v[1], v[2], v[3]],
+                }
+            })
+            .collect(),
+    )
+}
+
+fn crystal_json(project: &Project, args: &[&str]) -> serde_json::Value {
+    let out = project.run(&[&["crystal"], args, &["--json"]].concat());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("json")
+}
+
+/// `--scale 2,0.5,-1.5 --rotate 1,2,2,30 --translate 0.3,-0.2,0.7` prints
+/// `PsModel::transformed` of the untransformed terms, and that model at p is the
+/// untransformed one at S⁻¹ Rᵀ (p − t), with R built here from a quaternion.
+#[test]
+fn crystal_transform_flags_print_the_transformed_terms() {
+    let project = Project::new("");
+    let plain = crystal_json(&project, &[FAU, "--species", "Si"]);
+    let moved = crystal_json(
+        &project,
+        &[
+            FAU,
+            "--species",
+            "Si",
+            "--scale",
+            "2,0.5,-1.5",
+            "--rotate",
+            "1,2,2,30",
+            "--translate",
+            "0.3,-0.2,0.7",
+        ],
+    );
+    assert_eq!(moved["max_error"], plain["max_error"]);
+    let half = 30f64.to_radians() / 2.0;
+    let (w, x, y, z) = (
+        half.cos(),
+        half.sin() / 3.0,
+        2.0 * half.sin() / 3.0,
+        2.0 * half.sin() / 3.0,
+    );
+    let r = [
+        [
+            1.0 - 2.0 * (y * y + z * z),
+            2.0 * (x * y - z * w),
+            2.0 * (x * z + y * w),
+        ],
+        [
+            2.0 * (x * y + z * w),
+            1.0 - 2.0 * (x * x + z * z),
+            2.0 * (y * z - x * w),
+        ],
+        [
+            2.0 * (x * z - y * w),
+            2.0 * (y * z + x * w),
+            1.0 - 2.0 * (x * x + y * y),
+        ],
+    ];
+    let (s, t) = ([2.0, 0.5, -1.5], [0.3, -0.2, 0.7]);
+    let linear: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| r[i][j] * s[j]));
+    let untransformed = model_of(plain["terms"].as_array().expect("terms"));
+    let expected = untransformed.transformed(linear, t).expect("invertible");
+    let got = model_of(moved["terms"].as_array().expect("terms"));
+    assert_eq!(got.terms.len(), expected.terms.len());
+    for (g, e) in got.terms.iter().zip(&expected.terms) {
+        assert_eq!((g.moment, g.scale), (e.moment, e.scale));
+        for i in 0..4 {
+            assert!((g.vector[i] - e.vector[i]).abs() <= 1e-12, "{g:?} vs {e:?}");
+        }
+    }
+    let plain_terms = plain["terms"].as_array().expect("terms");
+    for i in 0..100 {
+        let p = [
+            i as f64 * 0.031 - 1.0,
+            (i * 13 % 17) as f64 * 0.11,
+            0.5 - i as f64 * 0.017,
+        ];
+        let d = [p[0] - t[0], p[1] - t[1], p[2] - t[2]];
+        let inverse: [f64; 3] =
+            std::array::from_fn(|j| (0..3).map(|i| r[i][j] * d[i]).sum::<f64>() / s[j]);
+        let (a, b) = (got.value(p), psi(plain_terms, inverse));
+        assert!((a - b).abs() <= 1e-12, "at {p:?}: {a} vs {b}");
+    }
+    // Bad flags are usage errors naming the flag.
+    let out = project.run(&["crystal", FAU, "--rotate", "0,0,0,90"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--rotate needs a non-zero axis"));
+    let out = project.run(&["crystal", FAU, "--scale", "1,2"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--scale takes 3"));
+}
+
+/// The JSON's Chebyshev form, evaluated here as Σ c_k cos(k arccos s) per basis vector,
+/// equals the cosine terms (the optimised Faujasite surface has scales 1 and 2 on the same
+/// vectors, so some polynomials have two degrees).
+#[test]
+fn crystal_chebyshev_form_equals_the_cosine_terms() {
+    let project = Project::new("");
+    let json = crystal_json(&project, &[FAU, "--species", "Si", "--optimize"]);
+    let terms = json["terms"].as_array().expect("terms");
+    let form = &json["chebyshev"];
+    let planes = form["planes"].as_array().expect("planes");
+    assert!(
+        planes
+            .iter()
+            .any(|p| p["coefficients"].as_array().is_some_and(|c| c.len() == 3))
+    );
+    let optimization = &json["optimization"];
+    let (before, after) = (
+        optimization["before"]["porosity"].as_f64().expect("before"),
+        optimization["after"]["porosity"].as_f64().expect("after"),
+    );
+    assert!(after > before + 0.1, "{optimization}");
+    for i in 0..100 {
+        let p = [
+            i as f64 * 0.0123,
+            (i * 7 % 11) as f64 * 0.09,
+            1.0 - i as f64 * 0.007,
+        ];
+        let chebyshev: f64 = form["constant"].as_f64().expect("constant")
+            + planes
+                .iter()
+                .map(|plane| {
+                    let v: Vec<f64> = plane["vector"]
+                        .as_array()
+                        .expect("vector")
+                        .iter()
+                        .map(|x| x.as_f64().expect("number"))
+                        .collect();
+                    let s = (TAU * (v[0] * p[0] + v[1] * p[1] + v[2] * p[2] + v[3])).cos();
+                    plane["coefficients"]
+                        .as_array()
+                        .expect("coefficients")
+                        .iter()
+                        .enumerate()
+                        .map(|(k, c)| c.as_f64().expect("number") * (k as f64 * s.acos()).cos())
+                        .sum::<f64>()
+                })
+                .sum::<f64>();
+        let cosine = psi(terms, p);
+        assert!(
+            (chebyshev - cosine).abs() <= 1e-12,
+            "{p:?}: {chebyshev} vs {cosine}"
+        );
+    }
+}
+
+/// Rock salt's ions lie on a six-dimensional family of scale-1 surfaces. The command says so,
+/// and gives the same surface for the symmetric CIF, for its P1 expansion written here (the
+/// face-centred translations of Na at 0 and Cl at ½, worked out by hand) and for that list
+/// shuffled.
+#[test]
+fn rock_salt_gives_one_surface_however_its_atoms_are_listed() {
+    let project = Project::new("");
+    let fcc = [
+        [0.0, 0.0, 0.0],
+        [0.0, 0.5, 0.5],
+        [0.5, 0.0, 0.5],
+        [0.5, 0.5, 0.0],
+    ];
+    let mut sites: Vec<(String, [f64; 3])> = Vec::new();
+    for (n, t) in fcc.iter().enumerate() {
+        sites.push((format!("Na{n}"), *t));
+        sites.push((format!("Cl{n}"), t.map(|c| (c + 0.5) % 1.0)));
+    }
+    let cif = |sites: &[(String, [f64; 3])]| {
+        let mut text = String::from(
+            "data_NaCl_P1\n_cell_length_a 5.6402\n_cell_length_b 5.6402\n_cell_length_c 5.6402\n\
+             _cell_angle_alpha 90\n_cell_angle_beta 90\n_cell_angle_gamma 90\n\
+             loop_\n_atom_site_label\n_atom_site_type_symbol\n_atom_site_fract_x\n\
+             _atom_site_fract_y\n_atom_site_fract_z\n",
+        );
+        for (label, p) in sites {
+            let species = &label[..2];
+            text.push_str(&format!("{label} {species} {} {} {}\n", p[0], p[1], p[2]));
+        }
+        text
+    };
+    project.write("p1.cif", &cif(&sites));
+    let shuffled: Vec<_> = [5, 2, 7, 0, 3, 6, 1, 4]
+        .iter()
+        .map(|&i| sites[i].clone())
+        .collect();
+    project.write("shuffled.cif", &cif(&shuffled));
+    let p1 = project.path().join("p1.cif").display().to_string();
+    let shuffled = project.path().join("shuffled.cif").display().to_string();
+    let runs: Vec<serde_json::Value> = [NACL, &p1, &shuffled]
+        .iter()
+        .map(|f| crystal_json(&project, &[f]))
+        .collect();
+    for json in &runs {
+        assert_eq!(json["atoms"], 8);
+        assert_eq!(json["multiplicity"], 6, "{json}");
+        assert_eq!(json["unique"], false);
+    }
+    let reference = model_of(runs[0]["terms"].as_array().expect("terms"));
+    for json in &runs[1..] {
+        let model = model_of(json["terms"].as_array().expect("terms"));
+        assert_eq!(model.terms.len(), reference.terms.len(), "{json}");
+        for (a, b) in model.terms.iter().zip(&reference.terms) {
+            assert_eq!((a.scale, a.vector), (b.scale, b.vector));
+            assert!((a.moment - b.moment).abs() <= 1e-9, "{a:?} vs {b:?}");
+        }
+    }
+    let out = project.run(&["crystal", &shuffled]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("not unique"));
+}

@@ -20,7 +20,7 @@ const MANY_PIECES: &[(&str, &str, &str)] = &[
     (
         "crystals.toml",
         "rock_salt",
-        "the surface through rock salt's ions is a stack of stepped sheets: the solid is layers",
+        "the surface through rock salt's ions is a stack of sheets: the solid is layers",
     ),
 ];
 

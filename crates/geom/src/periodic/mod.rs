@@ -14,6 +14,8 @@
 
 pub mod cif;
 pub mod model;
+pub mod nullspace;
+pub mod optimize;
 pub mod reconstruct;
 pub mod xyz;
 

@@ -11,6 +11,10 @@
 //! Invariants:
 //! - Transforms act on the basis vectors only (Lemmas 2–4): for a point map `r ↦ T r` the
 //!   transformed model is `ψ(T⁻¹ r)`, obtained by `p ↦ T⁻ᵀ p`; moments and scales never change.
+//! - The Chebyshev form (eq. 4) regroups the same terms by basis vector,
+//!   `ψ = c + Σ_m Σ_κ μ_κm T_κ(s_m)` with `s_m = cos(2π p_m · r)`: it exists exactly when every
+//!   scale is a natural number, and then equals the cosine form to rounding
+//!   (`T_κ(cos φ) = cos κφ`).
 //! - Evaluation at points and on grids uses the same terms; the grid sampler factors every
 //!   term over the axes (`cos(α+β+γ) = Re e^{iα} e^{iβ} e^{iγ}`) from exact per-axis tables,
 //!   so a plane's values are a pure function of its index and agree with direct evaluation to
@@ -164,6 +168,92 @@ impl PsModel {
                 .collect(),
         }
     }
+}
+
+/// The largest scale the Chebyshev form takes (its polynomials' degree).
+pub const CHEBYSHEV_MAX_DEGREE: usize = 1024;
+
+/// The Chebyshev (polynomial in cosines) form of a model, eq. 4.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChebyshevForm {
+    /// The constant terms summed (`μ cos(2π κ θ)` for each zero direction).
+    pub constant: f64,
+    /// One polynomial per distinct basis vector, in the order of first appearance.
+    pub planes: Vec<ChebyshevPlane>,
+}
+
+/// `Σ_κ coefficients[κ] T_κ(s)` in `s = cos(2π p · r)`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChebyshevPlane {
+    /// `p = [a, b, c, θ]`.
+    pub vector: [f64; 4],
+    /// By degree: `coefficients[κ]` multiplies `T_κ` (`coefficients[0]` is 0).
+    pub coefficients: Vec<f64>,
+}
+
+impl PsModel {
+    /// The Chebyshev form, or `None` when a scale is not a natural number up to
+    /// [`CHEBYSHEV_MAX_DEGREE`] (the form is defined for natural scales only).
+    pub fn chebyshev(&self) -> Option<ChebyshevForm> {
+        let mut form = ChebyshevForm {
+            constant: 0.0,
+            planes: Vec::new(),
+        };
+        for t in &self.terms {
+            if t.is_constant() {
+                form.constant += t.moment * (TAU * t.scale * t.vector[3]).cos();
+                continue;
+            }
+            let degree = t.scale;
+            if !(degree >= 1.0 && degree.fract() == 0.0 && degree <= CHEBYSHEV_MAX_DEGREE as f64) {
+                return None;
+            }
+            let degree = degree as usize;
+            let index = match form.planes.iter().position(|p| p.vector == t.vector) {
+                Some(i) => i,
+                None => {
+                    form.planes.push(ChebyshevPlane {
+                        vector: t.vector,
+                        coefficients: vec![0.0],
+                    });
+                    form.planes.len() - 1
+                }
+            };
+            let c = &mut form.planes[index].coefficients;
+            if c.len() <= degree {
+                c.resize(degree + 1, 0.0);
+            }
+            c[degree] += t.moment;
+        }
+        Some(form)
+    }
+}
+
+impl ChebyshevForm {
+    /// ψ at one point: each `s_m`, then its polynomial by Clenshaw's recurrence.
+    pub fn value(&self, p: [f64; 3]) -> f64 {
+        self.constant
+            + self
+                .planes
+                .iter()
+                .map(|plane| {
+                    let [a, b, c, theta] = plane.vector;
+                    let s = (TAU * (a * p[0] + b * p[1] + c * p[2] + theta)).cos();
+                    clenshaw(&plane.coefficients, s)
+                })
+                .sum::<f64>()
+    }
+}
+
+/// `Σ c[k] T_k(s)` by Clenshaw's recurrence `b_k = c_k + 2 s b_{k+1} − b_{k+2}`.
+fn clenshaw(c: &[f64], s: f64) -> f64 {
+    let (mut b1, mut b2) = (0.0, 0.0);
+    for &ck in c.iter().skip(1).rev() {
+        let b0 = ck + 2.0 * s * b1 - b2;
+        b2 = b1;
+        b1 = b0;
+    }
+    c.first().copied().unwrap_or(0.0) + s * b1 - b2
 }
 
 fn invert3(m: [[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
@@ -370,6 +460,45 @@ mod tests {
             let fd = (m.value(hi) - m.value(lo)) / (2.0 * h);
             assert!((fd - g[a]).abs() < 1e-6 * (1.0 + g[a].abs()), "axis {a}");
         }
+    }
+
+    /// T_κ(cos φ) = cos κφ: the polynomial form equals the cosine form, here against the
+    /// terms summed directly, at points spread over two cells.
+    #[test]
+    fn chebyshev_form_equals_the_cosine_form() {
+        let mut m = model();
+        // A second scale on the same plane and a phased constant join existing polynomials.
+        m.terms.push(PsTerm {
+            moment: 0.35,
+            scale: 8.0,
+            vector: [1.0, -1.0, 1.0, 0.1],
+        });
+        m.terms.push(PsTerm {
+            moment: 0.5,
+            scale: 2.0,
+            vector: [0.0, 0.0, 0.0, 0.125],
+        });
+        let form = m.chebyshev().expect("natural scales");
+        assert_eq!(form.planes.len(), 2);
+        assert_eq!(form.planes[0].coefficients.len(), 9);
+        for i in 0..200 {
+            let p = [
+                i as f64 * 0.0137,
+                (i * 7 % 23) as f64 * 0.087,
+                -(i as f64) * 0.0091,
+            ];
+            let direct: f64 = m
+                .terms
+                .iter()
+                .map(|t| {
+                    let [a, b, c, th] = t.vector;
+                    t.moment * (TAU * t.scale * (a * p[0] + b * p[1] + c * p[2] + th)).cos()
+                })
+                .sum();
+            assert!((form.value(p) - direct).abs() < 1e-12, "{p:?}");
+        }
+        m.terms[1].scale = 1.5;
+        assert!(m.chebyshev().is_none());
     }
 
     #[test]

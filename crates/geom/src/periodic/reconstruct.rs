@@ -4,9 +4,10 @@
 //! The incremental search (Fig. 2): the basis is the constant plus every direction at scale
 //! 1, then at 2, 4, … (`κ ∈ {1, 2, 4, …}` up to `max_scale`); at each step the moments are
 //! the right singular vector of the smallest singular value of
-//! `A[n, t] = cos(2π κ_t p_t · r_n)`, and the search stops once the largest `|ψ(r_n)|` is
-//! below `tolerance`. Optionally (§5.3, eq. 12) terms are then dropped greedily, each time
-//! the one whose removal gives the highest porosity, while the error stays below `tolerance`.
+//! `A[n, t] = cos(2π κ_t p_t · r_n)` ([`nullspace`](super::nullspace): the canonical one when
+//! that value is repeated, and the repetition is reported), and the search stops once the
+//! largest `|ψ(r_n)|` is below `tolerance`. Optionally the porosity is then raised
+//! ([`optimize`](super::optimize), §5.3 eq. 12) while the error stays below `tolerance`.
 //!
 //! Invariants:
 //! - The returned model is normalised so that `max |ψ|` over the unit cell is 1 (found on a
@@ -23,6 +24,8 @@
 use nalgebra::DMatrix;
 
 use super::model::{DIRECTIONS_13, PsModel, PsSampler, PsTerm};
+use super::nullspace::smallest_subspace;
+use super::optimize::{Optimization, optimize};
 use crate::field::{Grid, PlaneSampler};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -33,7 +36,7 @@ pub struct ReconstructOptions {
     pub max_scale: u32,
     /// Basis vectors `[a, b, c, θ]` (default: the 13 directions with θ = 0).
     pub directions: Vec<[f64; 4]>,
-    /// Drop terms greedily to raise porosity while keeping the error below `tolerance`.
+    /// Raise the porosity (eq. 12) while keeping the error below `tolerance`.
     pub optimize: bool,
 }
 
@@ -58,6 +61,9 @@ pub struct Metrics {
     /// `max_n |ψ(r_n)| / ψ_M`.
     pub max_error: f64,
     pub porosity: f64,
+    /// How many singular values are the smallest: above 1, the surface through the points is
+    /// not unique and the model is the canonical choice among them.
+    pub multiplicity: usize,
 }
 
 /// One step of the incremental search.
@@ -78,8 +84,8 @@ pub struct Reconstruction {
     /// Whether the error fell below the tolerance.
     pub converged: bool,
     pub steps: Vec<Step>,
-    /// Before and after the §5.3 term dropping, when asked for.
-    pub optimization: Option<(Metrics, Metrics)>,
+    /// Before and after the §5.3 optimisation, when asked for.
+    pub optimization: Option<Optimization>,
 }
 
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -142,11 +148,36 @@ pub fn reconstruct(
     let converged = metrics.max_error < options.tolerance;
     let mut optimization = None;
     if options.optimize && converged {
-        let before = metrics.clone();
-        let (after_model, after) = drop_terms(points, basis, options.tolerance)?;
-        model = after_model;
-        metrics = after.clone();
-        optimization = Some((before, after));
+        let next = scale
+            .checked_mul(2)
+            .filter(|s| *s <= options.max_scale.max(1))
+            .map(|s| {
+                let mut wider = basis.clone();
+                for d in &options.directions {
+                    add_unique(
+                        &mut wider,
+                        PsTerm {
+                            moment: 0.0,
+                            scale: f64::from(s),
+                            vector: *d,
+                        },
+                    );
+                }
+                (
+                    scales.iter().copied().chain([s]).collect::<Vec<u32>>(),
+                    wider,
+                )
+            });
+        let found = optimize(
+            points,
+            (&model, &metrics),
+            (&scales, &basis),
+            next.as_ref().map(|(s, b)| (s.as_slice(), b.as_slice())),
+            options.tolerance,
+        )?;
+        model = found.0;
+        metrics = found.1.after.clone();
+        optimization = Some(found.1);
     }
     Ok(Reconstruction {
         model,
@@ -160,7 +191,7 @@ pub fn reconstruct(
 }
 
 /// Adds `term` unless the basis already holds the same function (`κ p` equal up to sign).
-fn add_unique(basis: &mut Vec<PsTerm>, term: PsTerm) {
+pub(super) fn add_unique(basis: &mut Vec<PsTerm>, term: PsTerm) {
     let key = |t: &PsTerm| t.vector.map(|v| v * t.scale);
     let k = key(&term);
     let same = |a: [f64; 4], b: [f64; 4]| (0..4).all(|i| (a[i] - b[i]).abs() < 1e-12);
@@ -181,7 +212,7 @@ const NEGLIGIBLE_MOMENT: f64 = 1e-13;
 
 /// The null-vector model of `basis` through `points`, normalised, with its metrics; `grid`
 /// overrides the porosity grid size.
-fn fit(
+pub(super) fn fit(
     points: &[[f64; 3]],
     basis: &[PsTerm],
     grid: Option<usize>,
@@ -189,11 +220,37 @@ fn fit(
     if basis.is_empty() {
         return Err(ReconstructError::NoBasis);
     }
-    let moments = null_vector(points, basis)?;
+    let moments = smallest_subspace(&design_matrix(points, basis)).ok_or(ReconstructError::Svd)?;
+    normalised(
+        points,
+        basis,
+        &moments.representative(),
+        grid,
+        moments.multiplicity,
+    )
+}
+
+/// `A[n, t] = cos(2π κ_t p_t · r_n)`.
+pub(super) fn design_matrix(points: &[[f64; 3]], basis: &[PsTerm]) -> DMatrix<f64> {
+    DMatrix::from_fn(points.len(), basis.len(), |n, t| {
+        let p = points[n];
+        basis[t].phase(p[0], p[1], p[2]).cos()
+    })
+}
+
+/// The model `Σ moments[t] basis[t]` scaled to `max |ψ| = 1` with its first significant
+/// moment positive, negligible moments dropped, and its metrics.
+pub(super) fn normalised(
+    points: &[[f64; 3]],
+    basis: &[PsTerm],
+    moments: &[f64],
+    grid: Option<usize>,
+    multiplicity: usize,
+) -> Result<(PsModel, Metrics, usize), ReconstructError> {
     let model = PsModel::new(
         basis
             .iter()
-            .zip(&moments)
+            .zip(moments)
             .map(|(t, &moment)| PsTerm { moment, ..*t })
             .collect(),
     );
@@ -219,39 +276,14 @@ fn fit(
         dimension: model.terms.len(),
         max_error,
         porosity: mean_square / (psi_max * psi_max),
+        multiplicity,
     };
     Ok((model, metrics, n))
 }
 
-/// The right singular vector of the smallest singular value of `A[n, t]`. Rows of zeros pad
-/// `A` to at least as many rows as columns, so that the thin decomposition still holds every
-/// right singular vector (with fewer points than terms the null space is then exact).
-fn null_vector(points: &[[f64; 3]], basis: &[PsTerm]) -> Result<Vec<f64>, ReconstructError> {
-    let columns = basis.len();
-    let rows = points.len().max(columns);
-    let mut a = DMatrix::<f64>::zeros(rows, columns);
-    for (n, p) in points.iter().enumerate() {
-        for (t, term) in basis.iter().enumerate() {
-            a[(n, t)] = term.phase(p[0], p[1], p[2]).cos();
-        }
-    }
-    let svd = a
-        .try_svd_unordered(false, true, f64::EPSILON, 0)
-        .ok_or(ReconstructError::Svd)?;
-    let v_t = svd.v_t.as_ref().ok_or(ReconstructError::Svd)?;
-    let smallest = svd
-        .singular_values
-        .iter()
-        .enumerate()
-        .min_by(|a, b| a.1.total_cmp(b.1))
-        .map(|(i, _)| i)
-        .ok_or(ReconstructError::Svd)?;
-    Ok(v_t.row(smallest).iter().copied().collect())
-}
-
 /// Grid points per axis: four per period of the fastest term along an axis, at least 32 and
 /// at most 256 (above twice the largest frequency for scales up to 32 on the 13 directions).
-fn porosity_grid(model: &PsModel) -> usize {
+pub(super) fn porosity_grid(model: &PsModel) -> usize {
     let fastest = model
         .terms
         .iter()
@@ -342,43 +374,4 @@ fn solve3(m: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
         }
         det(mc) / d
     }))
-}
-
-/// §5.3: repeatedly drop the term whose removal gives the highest porosity while the error
-/// stays below `tolerance`; stop when no removal raises the porosity. Candidates are ranked
-/// on a coarser grid; the result is measured on the full one.
-fn drop_terms(
-    points: &[[f64; 3]],
-    mut basis: Vec<PsTerm>,
-    tolerance: f64,
-) -> Result<(PsModel, Metrics), ReconstructError> {
-    let (mut model, mut metrics, n) = fit(points, &basis, None)?;
-    let coarse = (n / 2).max(16);
-    let mut porosity = fit(points, &basis, Some(coarse))?.1.porosity;
-    while basis.len() > 2 {
-        let mut choice: Option<(usize, f64)> = None;
-        for drop in 0..basis.len() {
-            let mut trial = basis.clone();
-            trial.remove(drop);
-            let Ok((_, m, _)) = fit(points, &trial, Some(coarse)) else {
-                continue;
-            };
-            if m.max_error < tolerance && choice.is_none_or(|(_, best)| m.porosity > best) {
-                choice = Some((drop, m.porosity));
-            }
-        }
-        match choice {
-            Some((drop, p)) if p > porosity => {
-                basis.remove(drop);
-                porosity = p;
-            }
-            _ => break,
-        }
-    }
-    let (m, full, _) = fit(points, &basis, Some(n))?;
-    if full.max_error < tolerance {
-        model = m;
-        metrics = full;
-    }
-    Ok((model, metrics))
 }
