@@ -275,22 +275,13 @@ impl TileStage {
     /// element maps): `max |∇Φ·n|` on the faces, against the bound `2π N Σ |c|` of `|∇Φ|`.
     /// Quad and hex cells (D4, Oh) always do, their faces being mirror planes; the check
     /// names the cell should that ever fail.
-    fn check_normal_to_faces(
-        &self,
-        name: &str,
-        payload: &FittedPayload,
-        cell: &FittedCell,
-    ) -> Result<(), StageError> {
+    fn check_normal_to_faces(&self, name: &str, cell: &FittedCell) -> Result<(), StageError> {
         let residual = cell
             .max_face_normal_derivative()
             .map_err(StageError::from)?;
         let bound = std::f64::consts::TAU
-            * payload.n as f64
-            * payload
-                .coefficients
-                .iter()
-                .map(|c| c.3.hypot(c.4))
-                .sum::<f64>();
+            * cell.n() as f64
+            * cell.coefficients().iter().map(|c| c.c.norm()).sum::<f64>();
         if residual <= NORMAL_TOLERANCE * bound {
             return Ok(());
         }
@@ -361,17 +352,13 @@ impl TileStage {
         let scaffold = self.scaffold(file)?;
         self.check_kind(scaffold.kind)?;
         let group = group_of(&self.group)?;
-        let payloads = cells
+        let fitted = cells
             .iter()
-            .map(|bytes| FittedPayload::from_bytes(bytes))
-            .collect::<Result<Vec<_>, StageError>>()?;
-        let fitted = payloads
-            .iter()
-            .map(|payload| payload.cell(&group))
+            .map(|bytes| FittedPayload::from_bytes(bytes)?.cell(&group))
             .collect::<Result<Vec<_>, StageError>>()?;
         if self.continuity == Continuity::C1 {
-            for ((name, payload), cell) in self.cells.iter().zip(&payloads).zip(&fitted) {
-                self.check_normal_to_faces(name, payload, cell)?;
+            for (name, cell) in self.cells.iter().zip(&fitted) {
+                self.check_normal_to_faces(name, cell)?;
             }
         }
         let table = table.map(table_of).transpose()?;
@@ -827,4 +814,59 @@ fn node_scales(scaffold: &Scaffold) -> (Vec<f64>, Option<f64>) {
         .all(|s| (s - first).abs() <= 1e-9 * first)
         .then_some(first);
     (scales, uniform)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use latticebuild_geom::symmetric::{Complex64, Group};
+
+    fn stage(group: &str) -> TileStage {
+        TileStage {
+            output: "lattice".into(),
+            cells: vec!["cell".into()],
+            scaffold_name: "block".into(),
+            scaffold: ScaffoldInput::File("block.msh".into()),
+            group: GroupSpec::Named(group.into()),
+            by: None,
+            solid: Solid::Inside { offset: 0.0 },
+            sizing: Sizing::Field,
+            thickness: None,
+            offset: None,
+            resolution: 8,
+            skin: None,
+            thicken: None,
+            continuity: Continuity::C1,
+        }
+    }
+
+    /// A cell of `group` from a few low frequencies with unequal weights.
+    fn cell(group: &str) -> FittedCell {
+        let group = Group::by_name(group).unwrap();
+        let terms = [([1, 0, 0], 1.0), ([1, 1, 0], 0.5), ([1, 1, 1], -0.3)];
+        FittedCell::from_coefficients(group, 8, terms.map(|(f, c)| (f, Complex64::new(c, 0.0))))
+            .unwrap()
+    }
+
+    #[test]
+    fn c1_tilings_need_cells_that_meet_the_faces_at_right_angles() {
+        // Oh: the cube's faces are mirror planes of any periodic Oh field.
+        assert!(
+            stage("Oh")
+                .check_normal_to_faces("cell", &cell("Oh"))
+                .is_ok()
+        );
+        // Td: the tetrahedron's faces are not, so an unconstrained cell crosses them obliquely.
+        let td = cell("Td");
+        assert!(td.max_face_normal_derivative().unwrap() > 0.1);
+        let error = stage("Td")
+            .check_normal_to_faces("cell", &td)
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("cell `cell`"), "{error}");
+        assert!(error.contains("normal_to_faces = true"), "{error}");
+        let (constrained, _) = td.constrain_normal_to_faces().unwrap();
+        let stage = stage("Td");
+        assert!(stage.check_normal_to_faces("cell", &constrained).is_ok());
+    }
 }
