@@ -362,6 +362,28 @@ pub fn voxel_samples(min: [f64; 3], max: [f64; 3], voxel: f64) -> Result<[usize;
 pub struct Scaffold {
     pub name: Name,
     pub source: ScaffoldSource,
+    pub continuity: Continuity,
+}
+
+/// `continuity`: how smoothly the tiled field joins across element faces. Validation
+/// guarantees `C1` only on a grid of quad or hex elements (a mesh file's kind is checked by the
+/// stage).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Continuity {
+    /// The isoparametric maps: the field is continuous, its gradient jumps across faces.
+    #[default]
+    C0,
+    /// Cubic Hermite maps through shared corner derivatives (`geom::scaffold::SmoothMap`).
+    C1,
+}
+
+impl Continuity {
+    pub fn key(self) -> &'static str {
+        match self {
+            Continuity::C0 => "c0",
+            Continuity::C1 => "c1",
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq)]

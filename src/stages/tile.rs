@@ -36,6 +36,7 @@ use latticebuild_geom::expr;
 use latticebuild_geom::field::{Band, Grid, ScalarField, Solid};
 use latticebuild_geom::mesh::{Mesh, MeshChunk, SpareArrays};
 use latticebuild_geom::scaffold::{self, ElementKind, Scaffold};
+use latticebuild_geom::symmetric::FittedCell;
 use latticebuild_geom::tile::{
     RegionError, TiledRegion, TiledSolid, Transition, chunk_elements_for, extrude,
     reference_element, region_svg, stream_scaffold, thickness_normal, tile_surface_scaffold,
@@ -55,8 +56,8 @@ use super::sizing::{
 use super::symmetric::{FittedPayload, group_of};
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::{
-    GroupSpec, Manifest, NodalValue, ScaffoldGrid, ScaffoldSource, Sizing, Target, Thicken,
-    TiledOutput, tiling_group,
+    Continuity, GroupSpec, Manifest, NodalValue, ScaffoldGrid, ScaffoldSource, Sizing, Target,
+    Thicken, TiledOutput, tiling_group,
 };
 use crate::progress::StageProgress;
 
@@ -74,6 +75,10 @@ pub const VERSION: u32 = 7;
 /// (measured on the 100k bracket: 5 % less CPU end to end, peak memory 600 → 230 MB), and
 /// the pipeline fills and drains faster.
 const CHUNK_TRIANGLES: usize = 500_000;
+
+/// A C¹ tiling's largest `|∇Φ·n|` on the faces, relative to the bound of `|∇Φ|`: rounding
+/// only.
+const NORMAL_TOLERANCE: f64 = 1e-9;
 
 /// What the stage made: a whole mesh (2D tilings), or the head of a mesh whose chunks went to
 /// the `chunks` callback of [`TileStage::run`].
@@ -113,6 +118,9 @@ pub struct TileStage {
     pub skin: Option<f64>,
     /// How a 2D scaffold's region becomes a solid (`None`: the region).
     pub thicken: Option<Thicken>,
+    /// `c1`: the scaffold's elements mapped by C¹ maps (quad4, hex8), the cells checked to meet
+    /// their faces at right angles.
+    pub continuity: Continuity,
 }
 
 fn nodal_param(value: &Option<NodalValue>) -> Param {
@@ -155,6 +163,7 @@ impl TileStage {
             resolution: output.resolution,
             skin: output.skin,
             thicken: output.thicken,
+            continuity: scaffold.continuity,
         }
     }
 
@@ -189,6 +198,7 @@ impl TileStage {
             .param("sizing", sizing_param(&self.sizing))
             .param("resolution", Param::U64(self.resolution as u64))
             .param("skin", self.skin.unwrap_or(0.0))
+            .param("continuity", self.continuity.key())
             .param(
                 "thicken",
                 Param::List(match self.thicken {
@@ -243,6 +253,13 @@ impl TileStage {
                 )));
             }
         };
+        let mut scaffold = scaffold;
+        if self.continuity == Continuity::C1 {
+            scaffold
+                .make_c1()
+                .map_err(|e| StageError::geometry_of("scaffold", e))?;
+        }
+        // With C¹ maps this checks their Jacobians: graded spacing can fold a cubic edge.
         scaffold::check(&scaffold).map_err(|e| StageError::geometry_of("scaffold", e))?;
         Ok(scaffold)
     }
@@ -252,6 +269,29 @@ impl TileStage {
             ScaffoldInput::File(given) => format!("`{given}`"),
             ScaffoldInput::Grid(_) => format!("the grid `{}`", self.scaffold_name),
         }
+    }
+
+    /// A C¹ tiling's cell must meet its element's faces at right angles (docs/method.md §C¹
+    /// element maps): `max |∇Φ·n|` on the faces, against the bound `2π N Σ |c|` of `|∇Φ|`.
+    /// Quad and hex cells (D4, Oh) always do, their faces being mirror planes; the check
+    /// names the cell should that ever fail.
+    fn check_normal_to_faces(&self, name: &str, cell: &FittedCell) -> Result<(), StageError> {
+        let residual = cell
+            .max_face_normal_derivative()
+            .map_err(StageError::from)?;
+        let bound = std::f64::consts::TAU
+            * cell.n() as f64
+            * cell.coefficients().iter().map(|c| c.c.norm()).sum::<f64>();
+        if residual <= NORMAL_TOLERANCE * bound {
+            return Ok(());
+        }
+        Err(StageError::DoesNotFit(format!(
+            "`outputs.{}` tiles {} with `continuity = \"c1\"`, which needs its cells to meet \
+             the element's faces at right angles, but cell `{name}` crosses them with a normal \
+             derivative up to {residual:.3e}: set `normal_to_faces = true` on `cells.{name}`",
+            self.output,
+            self.source()
+        )))
     }
 
     /// The element kind against the cells' group, and the keys that need 2D (or 3D) elements.
@@ -316,6 +356,11 @@ impl TileStage {
             .iter()
             .map(|bytes| FittedPayload::from_bytes(bytes)?.cell(&group))
             .collect::<Result<Vec<_>, StageError>>()?;
+        if self.continuity == Continuity::C1 {
+            for (name, cell) in self.cells.iter().zip(&fitted) {
+                self.check_normal_to_faces(name, cell)?;
+            }
+        }
         let table = table.map(table_of).transpose()?;
         let sized = self.sized(&scaffold, fitted, table.as_ref())?;
         let fields = &sized.cells;
@@ -769,4 +814,59 @@ fn node_scales(scaffold: &Scaffold) -> (Vec<f64>, Option<f64>) {
         .all(|s| (s - first).abs() <= 1e-9 * first)
         .then_some(first);
     (scales, uniform)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use latticebuild_geom::symmetric::{Complex64, Group};
+
+    fn stage(group: &str) -> TileStage {
+        TileStage {
+            output: "lattice".into(),
+            cells: vec!["cell".into()],
+            scaffold_name: "block".into(),
+            scaffold: ScaffoldInput::File("block.msh".into()),
+            group: GroupSpec::Named(group.into()),
+            by: None,
+            solid: Solid::Inside { offset: 0.0 },
+            sizing: Sizing::Field,
+            thickness: None,
+            offset: None,
+            resolution: 8,
+            skin: None,
+            thicken: None,
+            continuity: Continuity::C1,
+        }
+    }
+
+    /// A cell of `group` from a few low frequencies with unequal weights.
+    fn cell(group: &str) -> FittedCell {
+        let group = Group::by_name(group).unwrap();
+        let terms = [([1, 0, 0], 1.0), ([1, 1, 0], 0.5), ([1, 1, 1], -0.3)];
+        FittedCell::from_coefficients(group, 8, terms.map(|(f, c)| (f, Complex64::new(c, 0.0))))
+            .unwrap()
+    }
+
+    #[test]
+    fn c1_tilings_need_cells_that_meet_the_faces_at_right_angles() {
+        // Oh: the cube's faces are mirror planes of any periodic Oh field.
+        assert!(
+            stage("Oh")
+                .check_normal_to_faces("cell", &cell("Oh"))
+                .is_ok()
+        );
+        // Td: the tetrahedron's faces are not, so an unconstrained cell crosses them obliquely.
+        let td = cell("Td");
+        assert!(td.max_face_normal_derivative().unwrap() > 0.1);
+        let error = stage("Td")
+            .check_normal_to_faces("cell", &td)
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("cell `cell`"), "{error}");
+        assert!(error.contains("normal_to_faces = true"), "{error}");
+        let (constrained, _) = td.constrain_normal_to_faces().unwrap();
+        let stage = stage("Td");
+        assert!(stage.check_normal_to_faces("cell", &constrained).is_ok());
+    }
 }

@@ -31,6 +31,7 @@ mod sdf_semantics;
 mod symmetric_constrain;
 mod symmetric_math;
 mod tile_2d;
+mod tile_gradient_jump;
 mod tile_scaffolds;
 mod tile_skin;
 mod validate_properties;

@@ -115,7 +115,7 @@ pub(super) const SIZING_KEYS: [&str; 3] = ["wall", "grow", "volume_fraction"];
 
 // `[scaffolds.NAME]` and the outputs tiled over them.
 
-pub(super) const SCAFFOLD_KEYS: [&str; 2] = ["mesh", "grid"];
+pub(super) const SCAFFOLD_KEYS: [&str; 3] = ["mesh", "grid", "continuity"];
 
 pub(super) const GRID_KEYS: [&str; 4] = ["min", "max", "divisions", "element"];
 

@@ -28,14 +28,15 @@ use toml::de::DeValue;
 
 use super::super::expression;
 use super::super::model::{
-    Cell, GroupSpec, MAX_GRID_ELEMENTS, NodalValue, Scaffold, ScaffoldGrid, ScaffoldSource, Sizing,
-    Thicken, TiledOutput, TiledTransition, tiling_group,
+    Cell, Continuity, GroupSpec, MAX_GRID_ELEMENTS, NodalValue, Scaffold, ScaffoldGrid,
+    ScaffoldSource, Sizing, Thicken, TiledOutput, TiledTransition, tiling_group,
 };
 use super::keys::{ALL_KEYS, GRID_KEYS, SCAFFOLD_KEYS, THICKEN_KEYS, TILED_KEYS, TRANSITION_KEYS};
 use super::meshes::FileKind;
 use super::{Checker, Fields, Key, Value};
 
 const GRID_ELEMENTS: [&str; 4] = ["hex", "tet", "quad", "tri"];
+const CONTINUITIES: [&str; 2] = ["c0", "c1"];
 pub(crate) const DEFAULT_RESOLUTION: usize = 12;
 const MAX_RESOLUTION: i64 = 256;
 const NODE_DATA_PREFIX: &str = "nodedata:";
@@ -73,6 +74,38 @@ pub(super) struct TilingContext<'c> {
 }
 
 impl Checker<'_, '_, '_> {
+    /// `continuity = "c0" | "c1"` (default `c0`); `c1` on a grid needs quad or hex elements.
+    fn continuity(
+        &mut self,
+        name: &str,
+        fields: &Fields<'_, '_>,
+        source: Option<&ScaffoldSource>,
+    ) -> Option<Continuity> {
+        let Some((_, value)) = fields.get("continuity") else {
+            return Some(Continuity::C0);
+        };
+        let key = format!("scaffolds.{name}.continuity");
+        let continuity = match self.choice(&key, value, &CONTINUITIES, "continuity")? {
+            "c1" => Continuity::C1,
+            _ => Continuity::C0,
+        };
+        if let (Continuity::C1, Some(ScaffoldSource::Grid(grid))) = (continuity, source)
+            && !matches!(grid.element, ElementKind::Hex8 | ElementKind::Quad4)
+        {
+            self.error(
+                value.span(),
+                &format!(
+                    "`{key} = \"c1\"` needs quad or hex elements, but the grid has {} elements",
+                    grid.element.name()
+                ),
+                "C¹ maps are made for quadrilaterals and hexahedra",
+                Some("use `element = \"hex\"` (or `\"quad\"`), or leave `continuity` out"),
+            );
+            return None;
+        }
+        Some(continuity)
+    }
+
     /// `[scaffolds.NAME]`: exactly one of `mesh` and `grid`.
     pub(super) fn scaffold(&mut self, key: &Key<'_>, value: &Value<'_>) -> Option<Scaffold> {
         let before = self.report.len();
@@ -119,12 +152,14 @@ impl Checker<'_, '_, '_> {
                 None
             }
         };
+        let continuity = self.continuity(name, &fields, source.as_ref());
         if self.report.len() > before {
             return None;
         }
         Some(Scaffold {
             name: self.name(key),
             source: source?,
+            continuity: continuity?,
         })
     }
 

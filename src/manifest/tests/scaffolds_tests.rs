@@ -220,3 +220,34 @@ fn two_dimensional_grids_need_d4_or_d3_cells() {
         ],
     );
 }
+
+#[test]
+fn continuity_is_c0_unless_c1_is_asked_and_c1_needs_quads_or_hexahedra() {
+    let manifest = parse_ok(
+        &with_cells(
+            "[scaffolds.g]\ngrid = { min = [0, 0, 0], max = [3, 2, 1], divisions = 1, element = \"hex\" }\n\
+             continuity = \"c1\"\n\n\
+             [scaffolds.q]\ngrid = { min = [0, 0], max = [3, 2], divisions = 1, element = \"quad\" }\n\
+             continuity = \"c0\"\n\n\
+             [scaffolds.m]\nmesh = \"part.msh\"\n",
+        ),
+        &[],
+    );
+    let continuity = |name: &str| manifest.scaffolds[name].continuity;
+    assert_eq!(continuity("g"), Continuity::C1);
+    assert_eq!(continuity("q"), Continuity::C0);
+    assert_eq!(continuity("m"), Continuity::C0, "the default");
+    assert_errors(
+        &with_cells(
+            "[scaffolds.g]\ngrid = { min = [0, 0, 0], max = [1, 1, 1], divisions = 1, element = \"tri\" }\n\
+             continuity = \"c1\"\n\n\
+             [scaffolds.h]\nmesh = \"part.msh\"\ncontinuity = \"smooth\"\n",
+        ),
+        &[
+            "`scaffolds.g.continuity = \"c1\"` needs quad or hex elements, but the grid has tri3",
+            "--> lattice.toml:18:14",
+            "unknown continuity `smooth` in `scaffolds.h.continuity`",
+            "expected one of",
+        ],
+    );
+}

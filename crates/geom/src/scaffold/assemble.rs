@@ -246,6 +246,7 @@ impl RawMesh {
             physical_names: self.physical_names,
             node_data,
             source: loc.name.to_string(),
+            smooth: None,
         })
     }
 }

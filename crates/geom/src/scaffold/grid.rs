@@ -159,5 +159,6 @@ pub fn grid(
         physical_names: Vec::new(),
         node_data: Vec::new(),
         source: "grid".to_string(),
+        smooth: None,
     })
 }

@@ -151,8 +151,12 @@ pub fn norm(v: [f64; 3]) -> f64 {
 }
 
 impl Scaffold {
-    /// x = X_e(ξ): the isoparametric map through all the element's nodes.
+    /// x = X_e(ξ): the isoparametric map through all the element's nodes, or the C¹ map
+    /// ([`Scaffold::make_c1`]) when made.
     pub fn map(&self, e: usize, xi: [f64; 3]) -> [f64; 3] {
+        if let Some(smooth) = &self.smooth {
+            return smooth.map(self, e, xi);
+        }
         if self.kind == ElementKind::Tet4 {
             // The tiling's common case, without the general path's table of weights: zeroing
             // and copying it took longer than the sum. Same sum, same order, same bits.
@@ -178,6 +182,9 @@ impl Scaffold {
 
     /// dx_i/dξ_a in `[i][a]` (2D kinds: columns 0 and 1; column 2 is zero).
     pub fn jacobian(&self, e: usize, xi: [f64; 3]) -> [[f64; 3]; 3] {
+        if let Some(smooth) = &self.smooth {
+            return smooth.jacobian(self, e, xi);
+        }
         let mut g = [[0.0; 3]; ElementKind::MAX_NODES];
         self.kind.shape_gradients(xi, &mut g);
         let mut j = [[0.0; 3]; 3];
@@ -199,6 +206,8 @@ impl Scaffold {
         // has degree 3 (+2 from Duffy); hex8 degree 2 per axis, hex20/hex27 degree 5. Other 2D
         // elements may be curved surfaces (a square root): 8 points.
         let n = match self.kind {
+            // A C¹ map's det J has degree 8 per axis (hex): 5 points integrate it exactly.
+            _ if self.smooth.is_some() => 5,
             ElementKind::Tri3 => 1,
             ElementKind::Tet4 | ElementKind::Hex8 => 2,
             ElementKind::Tet10 | ElementKind::Hex20 | ElementKind::Hex27 => 3,

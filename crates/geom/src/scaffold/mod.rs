@@ -29,6 +29,7 @@ mod grid;
 mod inp;
 mod map;
 mod msh;
+mod smooth;
 mod surface;
 mod vtk;
 mod xml;
@@ -40,6 +41,7 @@ pub use element::{ElementKind, HEX_CORNERS};
 pub use facets::{Facet, FacetSide, Facets};
 pub use grid::grid;
 pub use map::{Quadrature, gauss_legendre};
+pub use smooth::SmoothMap;
 
 /// A mesh of one element kind, with the file's tags, physical groups and nodal data.
 #[derive(Clone, Debug, PartialEq)]
@@ -63,6 +65,8 @@ pub struct Scaffold {
     pub node_data: Vec<NodeData>,
     /// The display name given to the reader (`grid` for generated scaffolds), for messages.
     pub source: String,
+    /// C¹ maps replacing the isoparametric ones ([`Scaffold::make_c1`]); `None` as read.
+    pub smooth: Option<std::sync::Arc<SmoothMap>>,
 }
 
 /// One nodal scalar field, by name.
