@@ -830,6 +830,7 @@ impl<'a> Builder<'a> {
             }
             Stage::Cell(stage) => Ok(Value::Bytes(Arc::new(stage.run()?))),
             Stage::MeshCell(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
+            Stage::VoxelCell(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
             Stage::Crystal(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
             Stage::Sample(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
             Stage::Fit(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
@@ -963,6 +964,7 @@ fn decode(stage: &Stage, payload: Vec<u8>) -> Option<Value> {
         Stage::File(_)
         | Stage::Cell(_)
         | Stage::MeshCell(_)
+        | Stage::VoxelCell(_)
         | Stage::Crystal(_)
         | Stage::Sample(_)
         | Stage::Fit(_)

@@ -29,6 +29,7 @@ mod symmetric;
 mod tiling;
 mod tiling_cache;
 mod volume_fraction;
+mod voxel_cells;
 mod watch;
 
 /// Cargo no longer discovers `tests/*.rs` (`autotests = false`), so a file not declared

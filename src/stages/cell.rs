@@ -39,6 +39,7 @@ impl CellStage {
             CellSource::Blend { .. }
             | CellSource::Minkowski { .. }
             | CellSource::Mesh(_)
+            | CellSource::Voxels(_)
             | CellSource::Crystal(_) => key.param("combined", true),
         }
     }
@@ -61,9 +62,10 @@ impl CellStage {
             CellSource::Blend { .. }
             | CellSource::Minkowski { .. }
             | CellSource::Mesh(_)
+            | CellSource::Voxels(_)
             | CellSource::Crystal(_) => {
                 return Err(StageError::Internal(
-                    "blends, Minkowski combinations, meshes and crystals have no formula".into(),
+                    "blends, Minkowski combinations, meshes, voxel images and crystals have no formula".into(),
                 ));
             }
         };
@@ -89,6 +91,9 @@ pub fn ps_payload(
 pub fn cell_field(payload: &[u8]) -> Result<Box<dyn ScalarField>, StageError> {
     if super::mesh::is_mesh_cell(payload) {
         return super::mesh::mesh_cell_field(payload);
+    }
+    if super::voxels::is_voxel_cell(payload) {
+        return super::voxels::voxel_cell_field(payload);
     }
     if super::crystal::is_ps_cell(payload) {
         return super::crystal::ps_cell_field(payload);

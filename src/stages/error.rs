@@ -21,6 +21,7 @@ use latticebuild_geom::stack_lang::ProgramError;
 use latticebuild_geom::symmetric::{FitError, GroupError};
 use latticebuild_geom::tile::RegionError;
 use latticebuild_geom::tile::TileError;
+use latticebuild_geom::voxels::VoxelError;
 
 use crate::cache::{CacheError, KeyError};
 
@@ -142,6 +143,8 @@ impl StageError {
 pub enum GeomError {
     #[error(transparent)]
     MeshRead(#[from] MeshReadError),
+    #[error(transparent)]
+    Voxel(#[from] VoxelError),
     #[error(transparent)]
     MeshSdf(#[from] MeshSdfError),
     #[error(transparent)]

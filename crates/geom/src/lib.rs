@@ -36,4 +36,5 @@ pub mod tile;
 pub mod tpms;
 pub mod validate;
 pub(crate) mod vec3;
+pub mod voxels;
 pub mod within;

@@ -15,7 +15,7 @@ pub(super) const BUILD_KEYS: [&str; 3] = ["out_dir", "units", "report"];
 
 // `[cells.NAME]`.
 
-pub(super) const CELL_KEYS: [&str; 19] = [
+pub(super) const CELL_KEYS: [&str; 25] = [
     "tpms",
     "expr",
     "blend",
@@ -23,6 +23,12 @@ pub(super) const CELL_KEYS: [&str; 19] = [
     "mesh",
     "placement",
     "sample",
+    "voxels",
+    "shape",
+    "dtype",
+    "byte_order",
+    "values",
+    "threshold",
     "crystal",
     "species",
     "reconstruct",
@@ -38,12 +44,13 @@ pub(super) const CELL_KEYS: [&str; 19] = [
 ];
 
 /// The keys that give a cell its shape; a cell has exactly one.
-pub(super) const SOURCE_KEYS: [&str; 7] = [
+pub(super) const SOURCE_KEYS: [&str; 8] = [
     "tpms",
     "expr",
     "blend",
     "minkowski",
     "mesh",
+    "voxels",
     "crystal",
     "ps",
 ];
