@@ -20,6 +20,7 @@ use crate::stages::crystal::CrystalStage;
 use crate::stages::file::FileStage;
 use crate::stages::islands::IslandsStage;
 use crate::stages::mesh::MeshCellStage;
+use crate::stages::points::PointCellStage;
 use crate::stages::program::ProgramStage;
 use crate::stages::sizing::{DensityStage, Over};
 use crate::stages::symmetric::{Combination, CombineStage, ConstrainStage, FitStage, SampleStage};
@@ -112,6 +113,13 @@ impl CellCompiler<'_> {
                 });
                 graph.push(format!("cell:{name}"), stage, vec![file])
             }
+            CellSource::Points(points) => {
+                let file = self.file(graph, points);
+                let stage = Stage::PointCell(PointCellStage {
+                    file: points.clone(),
+                });
+                graph.push(format!("cell:{name}"), stage, vec![file])
+            }
             CellSource::Crystal(crystal) => {
                 let file = self.file(graph, &crystal.file);
                 let stage = Stage::Crystal(CrystalStage {
@@ -133,6 +141,7 @@ impl CellCompiler<'_> {
             | CellSource::Expr(_)
             | CellSource::Mesh(_)
             | CellSource::Voxels(_)
+            | CellSource::Points(_)
             | CellSource::Crystal(_)
             | CellSource::Ps { .. } => {
                 let formula = self.source(graph, name);

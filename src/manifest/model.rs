@@ -73,6 +73,8 @@ pub enum CellSource {
     Mesh(MeshCell),
     /// A voxel image of occupancy or signed distance spanning the cell (`voxels = "part.npy"`).
     Voxels(VoxelCell),
+    /// Points with outward normals on the cell's surface (`points = "scan.ply"`).
+    Points(InputFile),
     /// A loci surface reconstructed from a crystal structure (`crystal = "file.cif"`).
     Crystal(CrystalCell),
     /// A periodic-surface model given term by term (`ps = { terms = [...] }`), moved by

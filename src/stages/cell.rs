@@ -40,6 +40,7 @@ impl CellStage {
             | CellSource::Minkowski { .. }
             | CellSource::Mesh(_)
             | CellSource::Voxels(_)
+            | CellSource::Points(_)
             | CellSource::Crystal(_) => key.param("combined", true),
         }
     }
@@ -63,9 +64,10 @@ impl CellStage {
             | CellSource::Minkowski { .. }
             | CellSource::Mesh(_)
             | CellSource::Voxels(_)
+            | CellSource::Points(_)
             | CellSource::Crystal(_) => {
                 return Err(StageError::Internal(
-                    "blends, Minkowski combinations, meshes, voxel images and crystals have no formula".into(),
+                    "blends, Minkowski combinations, meshes, voxel images, point clouds and crystals have no formula".into(),
                 ));
             }
         };
@@ -94,6 +96,9 @@ pub fn cell_field(payload: &[u8]) -> Result<Box<dyn ScalarField>, StageError> {
     }
     if super::voxels::is_voxel_cell(payload) {
         return super::voxels::voxel_cell_field(payload);
+    }
+    if super::points::is_point_cell(payload) {
+        return super::points::point_cell_field(payload);
     }
     if super::crystal::is_ps_cell(payload) {
         return super::crystal::ps_cell_field(payload);

@@ -16,6 +16,7 @@ use latticebuild_geom::mesh_read::MeshReadError;
 use latticebuild_geom::mesh_sdf::MeshSdfError;
 use latticebuild_geom::periodic::CrystalError;
 use latticebuild_geom::periodic::reconstruct::ReconstructError;
+use latticebuild_geom::point_cloud::PointCloudError;
 use latticebuild_geom::scaffold::ScaffoldError;
 use latticebuild_geom::stack_lang::ProgramError;
 use latticebuild_geom::symmetric::{FitError, GroupError};
@@ -145,6 +146,8 @@ pub enum GeomError {
     MeshRead(#[from] MeshReadError),
     #[error(transparent)]
     Voxel(#[from] VoxelError),
+    #[error(transparent)]
+    PointCloud(#[from] PointCloudError),
     #[error(transparent)]
     MeshSdf(#[from] MeshSdfError),
     #[error(transparent)]

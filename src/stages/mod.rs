@@ -35,6 +35,7 @@ pub mod file;
 pub mod islands;
 pub mod measure;
 pub mod mesh;
+pub mod points;
 pub mod program;
 pub mod sizing;
 pub mod symmetric;
@@ -58,6 +59,7 @@ pub enum Stage {
     Cell(cell::CellStage),
     MeshCell(mesh::MeshCellStage),
     VoxelCell(voxels::VoxelCellStage),
+    PointCell(points::PointCellStage),
     Crystal(crystal::CrystalStage),
     Sample(symmetric::SampleStage),
     Fit(symmetric::FitStage),
@@ -87,6 +89,7 @@ impl Stage {
             Stage::Cell(_) => "cell",
             Stage::MeshCell(_) => "mesh",
             Stage::VoxelCell(_) => "voxels",
+            Stage::PointCell(_) => "points",
             Stage::Crystal(_) => "crystal",
             Stage::Sample(_) => "sample",
             Stage::Fit(_) => "fit",
@@ -108,6 +111,7 @@ impl Stage {
             Stage::File(_) => file::VERSION,
             Stage::MeshCell(_) => mesh::VERSION,
             Stage::VoxelCell(_) => voxels::VERSION,
+            Stage::PointCell(_) => points::VERSION,
             Stage::Crystal(_) => crystal::VERSION,
             Stage::Sample(_) | Stage::Fit(_) | Stage::Combine(_) | Stage::Constrain(_) => {
                 symmetric::VERSION
@@ -129,6 +133,7 @@ impl Stage {
             Stage::Cell(s) => s.key_params(builder),
             Stage::MeshCell(s) => s.key_params(builder),
             Stage::VoxelCell(s) => s.key_params(builder),
+            Stage::PointCell(s) => s.key_params(builder),
             Stage::Crystal(s) => s.key_params(builder),
             Stage::Sample(s) => s.key_params(builder),
             Stage::Fit(s) => s.key_params(builder),
@@ -154,6 +159,7 @@ impl Stage {
             Stage::File(_) | Stage::Cell(_) => format!("input {i}"),
             Stage::MeshCell(_) => "mesh file".into(),
             Stage::VoxelCell(_) => "voxel file".into(),
+            Stage::PointCell(_) => "point file".into(),
             Stage::Crystal(_) => "crystal file".into(),
             Stage::Sample(_) => "formula".into(),
             Stage::Fit(s) if s.reads_samples() => "samples".into(),

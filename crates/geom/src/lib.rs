@@ -24,6 +24,7 @@ pub mod mesh_io;
 pub mod mesh_read;
 pub mod mesh_sdf;
 pub mod periodic;
+pub mod point_cloud;
 pub mod scaffold;
 mod scalar;
 pub mod spelling;

@@ -222,6 +222,7 @@ pub(super) fn input_files(
         .filter_map(|c| match &c.source {
             CellSource::Mesh(m) => Some(m.file.path.clone()),
             CellSource::Voxels(v) => Some(v.file.path.clone()),
+            CellSource::Points(file) => Some(file.path.clone()),
             CellSource::Crystal(c) => Some(c.file.path.clone()),
             _ => None,
         })

@@ -287,8 +287,8 @@ impl Checker<'_, '_, '_> {
                     self.error(
                         header.clone(),
                         &format!("cell `{name}` has no source"),
-                        "expected `tpms`, `expr`, `mesh`, `voxels`, `crystal`, `ps`, `blend` or \
-                         `minkowski`",
+                        "expected `tpms`, `expr`, `mesh`, `voxels`, `points`, `crystal`, `ps`, \
+                         `blend` or `minkowski`",
                         Some(
                             "add `tpms = \"gyroid\"` for a library surface or \
                              `expr = \"...\"` for a formula in x, y, z",
@@ -371,6 +371,7 @@ impl Checker<'_, '_, '_> {
             "blend" => self.blend(cell, value, cells),
             "mesh" => self.mesh_source(cell, value),
             "voxels" => self.voxel_source(cell, value),
+            "points" => self.points_source(cell, value),
             "crystal" => self.crystal_source(cell, value),
             "ps" => self.ps_source(cell, value),
             _ => self.minkowski(cell, value, cells),
@@ -397,10 +398,10 @@ impl Checker<'_, '_, '_> {
                 &format!("{shown} is a 2D group, but a triangle mesh bounds a 3D solid"),
                 Some("use `symmetry = \"Oh\"` or `\"Td\"`"),
             ),
-            CellSource::Voxels(_) => self.error(
+            CellSource::Voxels(_) | CellSource::Points(_) => self.error(
                 symmetry.span(),
-                &format!("2D group for a voxel cell in `cells.{cell}.symmetry`"),
-                &format!("{shown} is a 2D group, but a voxel image is a 3D solid"),
+                &format!("2D group for a voxel or point cell in `cells.{cell}.symmetry`"),
+                &format!("{shown} is a 2D group, but a voxel image or point cloud is 3D"),
                 Some("use `symmetry = \"Oh\"` or `\"Td\"`"),
             ),
             CellSource::Tpms(_) => self.error(

@@ -1,6 +1,6 @@
-//! The schema of voxel-image cells: `voxels = "part.npy"` (or a `.raw` file with `shape`,
-//! `dtype` and `byte_order`), read as `values = "occupancy"` (with `threshold`) or
-//! `"distance"`.
+//! The schema of captured-data cells: voxel images, `voxels = "part.npy"` (or a `.raw` file
+//! with `shape`, `dtype` and `byte_order`), read as `values = "occupancy"` (with `threshold`)
+//! or `"distance"`; and oriented point clouds, `points = "scan.ply"`, which take no options.
 //!
 //! A child of `schema.rs` (it extends its `Checker`). Invariants:
 //! - No IO: the file's existence is checked when the manifest is loaded from disk, its
@@ -14,6 +14,13 @@ use toml::de::DeValue;
 use super::super::model::{CellSource, RawLayout, VoxelCell};
 use super::meshes::FileKind;
 use super::{Checker, Fields, Value};
+
+const POINT_FILES: FileKind = FileKind {
+    extensions: &["ply", "xyz"],
+    noun: "point cloud",
+    help: "save the points with normals as PLY (`nx`, `ny`, `nz` properties), or as text of \
+           six columns `x y z nx ny nz` (`.xyz`)",
+};
 
 const VOXEL_FILES: FileKind = FileKind {
     extensions: &["npy", "raw"],
@@ -40,6 +47,14 @@ impl Checker<'_, '_, '_> {
             raw: None,
             values: VoxelValues::Occupancy { threshold: None },
         }))
+    }
+
+    /// `points = "file"`: a cell source of oriented points (no options).
+    pub(super) fn points_source(&mut self, cell: &str, value: &Value<'_>) -> Option<CellSource> {
+        let key = format!("cells.{cell}.points");
+        let given = self.string(&key, value)?;
+        self.input_file(&format!("`{key}`"), given, value.span(), &POINT_FILES)
+            .map(CellSource::Points)
     }
 
     /// The options of a voxel cell: `(raw layout, values)`, and an error for each of them

@@ -9,10 +9,11 @@ const OUTPUT: &str =
 
 pub(super) const VOXEL_ERR_CASES: &[ErrCase] = &[
     ErrCase {
-        name: "voxel keys without voxels, an unknown extension and a 2D group",
+        name: "voxel keys without voxels, unknown voxel and point extensions and a 2D group",
         manifest: "[cells.a]\ntpms = \"p\"\nvalues = \"distance\"\nshape = [2, 2, 2]\n\n\
                    [cells.b]\nvoxels = \"scan.tif\"\n\n[cells.c]\nvoxels = \"scan.npy\"\n\
-                   symmetry = \"D4\"\n\n[outputs.o]\ncell = \"a\"\n\
+                   symmetry = \"D4\"\n\n[cells.d]\npoints = \"scan.pcd\"\n\n\
+                   [cells.e]\npoints = \"scan.xyz\"\nthreshold = 3\n\n[outputs.o]\ncell = \"a\"\n\
                    domain = { min = [0, 0, 0], max = [1, 1, 1] }\nsamples = 8\n",
         sets: &[],
     },
@@ -76,4 +77,14 @@ fn voxel_cells_read_their_layout_and_values() {
         panic!("not a voxel cell");
     };
     assert_eq!((cell.raw, cell.values), (None, VoxelValues::Distance));
+
+    let manifest = parse_ok(
+        &format!("[cells.a]\npoints = \"scan/part.PLY\"\nsymmetry = \"Td\"\n{OUTPUT}"),
+        &[],
+    );
+    let CellSource::Points(file) = &manifest.cells["a"].source else {
+        panic!("not a point cell");
+    };
+    assert_eq!(file.path, std::path::Path::new("./scan/part.PLY"));
+    assert_eq!(manifest.inputs.len(), 1);
 }
