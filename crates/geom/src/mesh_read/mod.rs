@@ -168,9 +168,12 @@ pub fn read(bytes: &[u8], format: Format) -> Result<TriangleSoup, MeshReadError>
     Ok(soup)
 }
 
-/// The vertices of a PLY file with their normals (`nx`, `ny`, `nz`; empty when the vertices
-/// have none), for point clouds: faces are read but not needed.
-pub fn read_ply_vertices(bytes: &[u8]) -> Result<(Vec<[f64; 3]>, Vec<[f64; 3]>), MeshReadError> {
+/// Vertex positions and their normals (empty when the vertices have none).
+pub type PlyVertices = (Vec<[f64; 3]>, Vec<[f64; 3]>);
+
+/// The vertices of a PLY file with their normals (`nx`, `ny`, `nz`), for point clouds: faces
+/// are read but not needed.
+pub fn read_ply_vertices(bytes: &[u8]) -> Result<PlyVertices, MeshReadError> {
     ply::read_with_normals(bytes).map(|(soup, normals)| (soup.positions, normals))
 }
 
