@@ -861,6 +861,8 @@ impl<'a> Builder<'a> {
             }
             Stage::Cell(stage) => Ok(Value::Bytes(Arc::new(stage.run()?))),
             Stage::MeshCell(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
+            Stage::VoxelCell(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
+            Stage::PointCell(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
             Stage::Crystal(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
             Stage::Sample(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
             Stage::Fit(stage) => Ok(Value::Bytes(Arc::new(stage.run(&bytes(0)?)?))),
@@ -994,6 +996,8 @@ fn decode(stage: &Stage, payload: Vec<u8>) -> Option<Value> {
         Stage::File(_)
         | Stage::Cell(_)
         | Stage::MeshCell(_)
+        | Stage::VoxelCell(_)
+        | Stage::PointCell(_)
         | Stage::Crystal(_)
         | Stage::Sample(_)
         | Stage::Fit(_)

@@ -63,7 +63,7 @@ fn build(manifest: &Path, threads: usize) -> BTreeMap<String, Vec<u8>> {
     let scratch = tempfile::tempdir().expect("tempdir");
     let name = manifest.file_name().expect("name");
     std::fs::copy(manifest, scratch.path().join(name)).expect("copy");
-    for dir in ["meshes", "crystals", "scaffolds"] {
+    for dir in ["meshes", "crystals", "scaffolds", "voxels", "points"] {
         common::copy_dir(&examples.join(dir), &scratch.path().join(dir), &[]);
     }
     let mut command = Command::new(common::BIN);

@@ -81,6 +81,7 @@ examples!(
     expression,
     gyroid,
     mesh_inputs,
+    sources,
     symmetric_cells,
     tiling,
     tiling_2d,
@@ -130,8 +131,8 @@ fn check_example(file: &str) {
     let scratch = tempfile::tempdir().expect("tempdir");
     let manifest = scratch.path().join(path.file_name().expect("name"));
     std::fs::copy(&path, &manifest).expect("copy");
-    // The meshes, crystals and scaffolds examples read, at the same relative place.
-    for dir in ["meshes", "crystals", "scaffolds"] {
+    // The meshes, crystals, scaffolds, images and points examples read, at the same place.
+    for dir in ["meshes", "crystals", "scaffolds", "voxels", "points"] {
         common::copy_dir(&examples.join(dir), &scratch.path().join(dir), &[]);
     }
     let out = Command::new(common::BIN)

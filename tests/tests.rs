@@ -22,6 +22,7 @@ mod mesh_inputs;
 mod misuse;
 mod model_units;
 mod pieces;
+mod point_cells;
 mod sdf_cli;
 mod sdf_manifest;
 mod shells;
@@ -29,6 +30,7 @@ mod symmetric;
 mod tiling;
 mod tiling_cache;
 mod volume_fraction;
+mod voxel_cells;
 mod watch;
 
 /// Cargo no longer discovers `tests/*.rs` (`autotests = false`), so a file not declared

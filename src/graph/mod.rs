@@ -20,10 +20,12 @@ use crate::stages::crystal::CrystalStage;
 use crate::stages::file::FileStage;
 use crate::stages::islands::IslandsStage;
 use crate::stages::mesh::MeshCellStage;
+use crate::stages::points::PointCellStage;
 use crate::stages::program::ProgramStage;
 use crate::stages::sizing::{DensityStage, Over};
 use crate::stages::symmetric::{Combination, CombineStage, ConstrainStage, FitStage, SampleStage};
 use crate::stages::tile::TileStage;
+use crate::stages::voxels::VoxelCellStage;
 use crate::stages::write::WriteStage;
 
 /// Index of a node in [`Graph::nodes`].
@@ -104,6 +106,20 @@ impl CellCompiler<'_> {
                 let stage = Stage::MeshCell(MeshCellStage { cell: mesh.clone() });
                 graph.push(format!("cell:{name}"), stage, vec![file])
             }
+            CellSource::Voxels(voxels) => {
+                let file = self.file(graph, &voxels.file);
+                let stage = Stage::VoxelCell(VoxelCellStage {
+                    cell: voxels.clone(),
+                });
+                graph.push(format!("cell:{name}"), stage, vec![file])
+            }
+            CellSource::Points(points) => {
+                let file = self.file(graph, points);
+                let stage = Stage::PointCell(PointCellStage {
+                    file: points.clone(),
+                });
+                graph.push(format!("cell:{name}"), stage, vec![file])
+            }
             CellSource::Crystal(crystal) => {
                 let file = self.file(graph, &crystal.file);
                 let stage = Stage::Crystal(CrystalStage {
@@ -124,6 +140,8 @@ impl CellCompiler<'_> {
             CellSource::Tpms(_)
             | CellSource::Expr(_)
             | CellSource::Mesh(_)
+            | CellSource::Voxels(_)
+            | CellSource::Points(_)
             | CellSource::Crystal(_)
             | CellSource::Ps { .. } => {
                 let formula = self.source(graph, name);

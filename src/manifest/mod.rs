@@ -74,6 +74,8 @@ fn check_input_files(
         .iter()
         .filter_map(|(name, c)| match &c.source {
             CellSource::Mesh(m) => Some((format!("cells.{name}.mesh"), &m.file, "mesh")),
+            CellSource::Voxels(v) => Some((format!("cells.{name}.voxels"), &v.file, "voxel image")),
+            CellSource::Points(f) => Some((format!("cells.{name}.points"), f, "point cloud")),
             CellSource::Crystal(c) => Some((format!("cells.{name}.crystal"), &c.file, "crystal")),
             _ => None,
         })

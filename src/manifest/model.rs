@@ -72,6 +72,10 @@ pub enum CellSource {
     Minkowski { op: MinkowskiOp, cells: [String; 2] },
     /// The solid of a triangle mesh file, in the cell's reference frame.
     Mesh(MeshCell),
+    /// A voxel image of occupancy or signed distance spanning the cell (`voxels = "part.npy"`).
+    Voxels(VoxelCell),
+    /// Points with outward normals on the cell's surface (`points = "scan.ply"`).
+    Points(InputFile),
     /// A loci surface reconstructed from a crystal structure (`crystal = "file.cif"`).
     Crystal(CrystalCell),
     /// A periodic-surface model given term by term (`ps = { terms = [...] }`), moved by
@@ -205,6 +209,26 @@ pub struct MeshCell {
     pub fit_placement: bool,
     /// What is sampled: signed distances, or only inside (−1) / outside (+1).
     pub sampling: MeshSampling,
+}
+
+/// A cell whose solid is a voxel image spanning the cell `[-½, ½]³` (see
+/// `latticebuild_geom::voxels` for the conventions).
+#[derive(Clone, Debug, PartialEq)]
+pub struct VoxelCell {
+    /// A `.npy` file, or a `.raw` one read with `raw`.
+    pub file: InputFile,
+    /// The layout of a raw file (validation guarantees it is given exactly for `.raw`).
+    pub raw: Option<RawLayout>,
+    pub values: latticebuild_geom::voxels::VoxelValues,
+}
+
+/// How a raw voxel file is laid out: x fastest, then y, then z. Validation guarantees every
+/// axis is at least 1.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RawLayout {
+    pub shape: [u64; 3],
+    pub dtype: latticebuild_geom::voxels::VoxelType,
+    pub big_endian: bool,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -36,6 +36,7 @@ mod program;
 mod scaffolds;
 mod sizing;
 mod symmetry;
+mod voxels;
 
 pub(crate) use keys::expects_string;
 use keys::{BUILD_KEYS, DOMAIN_KEYS, OUTPUT_KEYS, TOP_KEYS};

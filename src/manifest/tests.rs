@@ -853,6 +853,7 @@ fn reference_example_is_valid() {
 mod mesh_tests;
 mod symmetry_tests;
 mod transform_tests;
+mod voxel_tests;
 
 mod program_tests;
 

@@ -39,6 +39,8 @@ impl CellStage {
             CellSource::Blend { .. }
             | CellSource::Minkowski { .. }
             | CellSource::Mesh(_)
+            | CellSource::Voxels(_)
+            | CellSource::Points(_)
             | CellSource::Crystal(_) => key.param("combined", true),
         }
     }
@@ -61,9 +63,11 @@ impl CellStage {
             CellSource::Blend { .. }
             | CellSource::Minkowski { .. }
             | CellSource::Mesh(_)
+            | CellSource::Voxels(_)
+            | CellSource::Points(_)
             | CellSource::Crystal(_) => {
                 return Err(StageError::Internal(
-                    "blends, Minkowski combinations, meshes and crystals have no formula".into(),
+                    "blends, Minkowski combinations, meshes, voxel images, point clouds and crystals have no formula".into(),
                 ));
             }
         };
@@ -89,6 +93,12 @@ pub fn ps_payload(
 pub fn cell_field(payload: &[u8]) -> Result<Box<dyn ScalarField>, StageError> {
     if super::mesh::is_mesh_cell(payload) {
         return super::mesh::mesh_cell_field(payload);
+    }
+    if super::voxels::is_voxel_cell(payload) {
+        return super::voxels::voxel_cell_field(payload);
+    }
+    if super::points::is_point_cell(payload) {
+        return super::points::point_cell_field(payload);
     }
     if super::crystal::is_ps_cell(payload) {
         return super::crystal::ps_cell_field(payload);

@@ -16,11 +16,13 @@ use latticebuild_geom::mesh_read::MeshReadError;
 use latticebuild_geom::mesh_sdf::MeshSdfError;
 use latticebuild_geom::periodic::CrystalError;
 use latticebuild_geom::periodic::reconstruct::ReconstructError;
+use latticebuild_geom::point_cloud::PointCloudError;
 use latticebuild_geom::scaffold::ScaffoldError;
 use latticebuild_geom::stack_lang::ProgramError;
 use latticebuild_geom::symmetric::{FitError, GroupError};
 use latticebuild_geom::tile::RegionError;
 use latticebuild_geom::tile::TileError;
+use latticebuild_geom::voxels::VoxelError;
 
 use crate::cache::{CacheError, KeyError};
 
@@ -142,6 +144,10 @@ impl StageError {
 pub enum GeomError {
     #[error(transparent)]
     MeshRead(#[from] MeshReadError),
+    #[error(transparent)]
+    Voxel(#[from] VoxelError),
+    #[error(transparent)]
+    PointCloud(#[from] PointCloudError),
     #[error(transparent)]
     MeshSdf(#[from] MeshSdfError),
     #[error(transparent)]

@@ -35,10 +35,12 @@ pub mod file;
 pub mod islands;
 pub mod measure;
 pub mod mesh;
+pub mod points;
 pub mod program;
 pub mod sizing;
 pub mod symmetric;
 pub mod tile;
+pub mod voxels;
 pub mod write;
 
 use crate::cache::{ContentHash, Key, KeyBuilder, KeyDescription, KeyError};
@@ -56,6 +58,8 @@ pub enum Stage {
     File(file::FileStage),
     Cell(cell::CellStage),
     MeshCell(mesh::MeshCellStage),
+    VoxelCell(voxels::VoxelCellStage),
+    PointCell(points::PointCellStage),
     Crystal(crystal::CrystalStage),
     Sample(symmetric::SampleStage),
     Fit(symmetric::FitStage),
@@ -84,6 +88,8 @@ impl Stage {
             Stage::File(_) => "file",
             Stage::Cell(_) => "cell",
             Stage::MeshCell(_) => "mesh",
+            Stage::VoxelCell(_) => "voxels",
+            Stage::PointCell(_) => "points",
             Stage::Crystal(_) => "crystal",
             Stage::Sample(_) => "sample",
             Stage::Fit(_) => "fit",
@@ -104,6 +110,8 @@ impl Stage {
             Stage::Cell(_) => cell::VERSION,
             Stage::File(_) => file::VERSION,
             Stage::MeshCell(_) => mesh::VERSION,
+            Stage::VoxelCell(_) => voxels::VERSION,
+            Stage::PointCell(_) => points::VERSION,
             Stage::Crystal(_) => crystal::VERSION,
             Stage::Sample(_) | Stage::Fit(_) | Stage::Combine(_) | Stage::Constrain(_) => {
                 symmetric::VERSION
@@ -124,6 +132,8 @@ impl Stage {
             Stage::File(_) => builder,
             Stage::Cell(s) => s.key_params(builder),
             Stage::MeshCell(s) => s.key_params(builder),
+            Stage::VoxelCell(s) => s.key_params(builder),
+            Stage::PointCell(s) => s.key_params(builder),
             Stage::Crystal(s) => s.key_params(builder),
             Stage::Sample(s) => s.key_params(builder),
             Stage::Fit(s) => s.key_params(builder),
@@ -148,6 +158,8 @@ impl Stage {
         match self {
             Stage::File(_) | Stage::Cell(_) => format!("input {i}"),
             Stage::MeshCell(_) => "mesh file".into(),
+            Stage::VoxelCell(_) => "voxel file".into(),
+            Stage::PointCell(_) => "point file".into(),
             Stage::Crystal(_) => "crystal file".into(),
             Stage::Sample(_) => "formula".into(),
             Stage::Fit(s) if s.reads_samples() => "samples".into(),

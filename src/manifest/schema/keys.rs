@@ -15,7 +15,7 @@ pub(super) const BUILD_KEYS: [&str; 3] = ["out_dir", "units", "report"];
 
 // `[cells.NAME]`.
 
-pub(super) const CELL_KEYS: [&str; 19] = [
+pub(super) const CELL_KEYS: [&str; 26] = [
     "tpms",
     "expr",
     "blend",
@@ -23,6 +23,13 @@ pub(super) const CELL_KEYS: [&str; 19] = [
     "mesh",
     "placement",
     "sample",
+    "voxels",
+    "shape",
+    "dtype",
+    "byte_order",
+    "values",
+    "threshold",
+    "points",
     "crystal",
     "species",
     "reconstruct",
@@ -38,12 +45,14 @@ pub(super) const CELL_KEYS: [&str; 19] = [
 ];
 
 /// The keys that give a cell its shape; a cell has exactly one.
-pub(super) const SOURCE_KEYS: [&str; 7] = [
+pub(super) const SOURCE_KEYS: [&str; 9] = [
     "tpms",
     "expr",
     "blend",
     "minkowski",
     "mesh",
+    "voxels",
+    "points",
     "crystal",
     "ps",
 ];

@@ -211,7 +211,7 @@ impl Checker<'_, '_, '_> {
     }
 }
 
-/// Every mesh or crystal file the manifest reads, once each, in name order (for `watch` and the load-time
+/// Every mesh, voxel or crystal file the manifest reads, once each, in name order (for `watch` and the load-time
 /// existence check).
 pub(super) fn input_files(
     cells: &BTreeMap<String, Cell>,
@@ -221,6 +221,8 @@ pub(super) fn input_files(
         .values()
         .filter_map(|c| match &c.source {
             CellSource::Mesh(m) => Some(m.file.path.clone()),
+            CellSource::Voxels(v) => Some(v.file.path.clone()),
+            CellSource::Points(file) => Some(file.path.clone()),
             CellSource::Crystal(c) => Some(c.file.path.clone()),
             _ => None,
         })

@@ -212,6 +212,18 @@ impl Checker<'_, '_, '_> {
         let is_crystal =
             matches!(source, Some((CellSource::Crystal(_), _))) || given.contains(&"crystal");
         let crystal_options = self.crystal_options(name, &fields, is_crystal);
+        let voxels = match &source {
+            Some((CellSource::Voxels(v), value)) => {
+                Some((*value, v.file.given.to_ascii_lowercase().ends_with(".raw")))
+            }
+            _ => None,
+        };
+        // The options of an invalid or conflicting `voxels` are not checked as well.
+        let voxel_options = if given.contains(&"voxels") && voxels.is_none() {
+            None
+        } else {
+            self.voxel_options(name, &fields, voxels)
+        };
         let is_ps = matches!(source, Some((CellSource::Ps { .. }, _))) || given.contains(&"ps");
         let transform = self.ps_transform(name, &fields, is_crystal || is_ps);
 
@@ -224,6 +236,10 @@ impl Checker<'_, '_, '_> {
         {
             mesh.fit_placement = fit_placement;
             mesh.sampling = sampling;
+        }
+        if let (CellSource::Voxels(cell), Some((raw, values))) = (&mut source, voxel_options) {
+            cell.raw = raw;
+            cell.values = values;
         }
         if let (CellSource::Crystal(crystal), Some(options)) = (&mut source, crystal_options) {
             options.apply(crystal);
@@ -279,7 +295,8 @@ impl Checker<'_, '_, '_> {
                     self.error(
                         header.clone(),
                         &format!("cell `{name}` has no source"),
-                        "expected `tpms`, `expr`, `mesh`, `crystal`, `ps`, `blend` or `minkowski`",
+                        "expected `tpms`, `expr`, `mesh`, `voxels`, `points`, `crystal`, `ps`, \
+                         `blend` or `minkowski`",
                         Some(
                             "add `tpms = \"gyroid\"` for a library surface or \
                              `expr = \"...\"` for a formula in x, y, z",
@@ -361,6 +378,8 @@ impl Checker<'_, '_, '_> {
             "expr" => self.expression(cell, value).map(CellSource::Expr),
             "blend" => self.blend(cell, value, cells),
             "mesh" => self.mesh_source(cell, value),
+            "voxels" => self.voxel_source(cell, value),
+            "points" => self.points_source(cell, value),
             "crystal" => self.crystal_source(cell, value),
             "ps" => self.ps_source(cell, value),
             _ => self.minkowski(cell, value, cells),
@@ -385,6 +404,12 @@ impl Checker<'_, '_, '_> {
                 symmetry.span(),
                 &format!("2D group for a mesh cell in `cells.{cell}.symmetry`"),
                 &format!("{shown} is a 2D group, but a triangle mesh bounds a 3D solid"),
+                Some("use `symmetry = \"Oh\"` or `\"Td\"`"),
+            ),
+            CellSource::Voxels(_) | CellSource::Points(_) => self.error(
+                symmetry.span(),
+                &format!("2D group for a voxel or point cell in `cells.{cell}.symmetry`"),
+                &format!("{shown} is a 2D group, but a voxel image or point cloud is 3D"),
                 Some("use `symmetry = \"Oh\"` or `\"Td\"`"),
             ),
             CellSource::Tpms(_) => self.error(

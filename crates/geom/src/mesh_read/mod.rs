@@ -168,6 +168,15 @@ pub fn read(bytes: &[u8], format: Format) -> Result<TriangleSoup, MeshReadError>
     Ok(soup)
 }
 
+/// Vertex positions and their normals (empty when the vertices have none).
+pub type PlyVertices = (Vec<[f64; 3]>, Vec<[f64; 3]>);
+
+/// The vertices of a PLY file with their normals (`nx`, `ny`, `nz`), for point clouds: faces
+/// are read but not needed.
+pub fn read_ply_vertices(bytes: &[u8]) -> Result<PlyVertices, MeshReadError> {
+    ply::read_with_normals(bytes).map(|(soup, normals)| (soup.positions, normals))
+}
+
 /// Reads `bytes` in the format its content shows ([`detect`]), or, when the content is not
 /// conclusive, the format `extension` names.
 pub fn read_auto(bytes: &[u8], extension: Option<&str>) -> Result<TriangleSoup, MeshReadError> {

@@ -41,6 +41,8 @@ enum Kind {
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Role {
     Coordinate(usize),
+    /// `nx`, `ny`, `nz` of a vertex: read only for point clouds.
+    Normal(usize),
     Indices,
     Ignored,
 }
@@ -162,6 +164,9 @@ fn header(bytes: &[u8]) -> Result<Header, MeshReadError> {
                     (b"vertex", b"x", Kind::Scalar(_)) => Role::Coordinate(0),
                     (b"vertex", b"y", Kind::Scalar(_)) => Role::Coordinate(1),
                     (b"vertex", b"z", Kind::Scalar(_)) => Role::Coordinate(2),
+                    (b"vertex", b"nx", Kind::Scalar(_)) => Role::Normal(0),
+                    (b"vertex", b"ny", Kind::Scalar(_)) => Role::Normal(1),
+                    (b"vertex", b"nz", Kind::Scalar(_)) => Role::Normal(2),
                     (b"face", b"vertex_indices" | b"vertex_index", Kind::List { item, .. })
                         if item.is_integer() =>
                     {
@@ -264,6 +269,14 @@ impl Body<'_> {
 }
 
 pub(super) fn read(bytes: &[u8]) -> Result<TriangleSoup, MeshReadError> {
+    read_with_normals(bytes).map(|(soup, _)| soup)
+}
+
+/// The vertices and, when every vertex has `nx`, `ny`, `nz`, their normals (else empty);
+/// faces are read as for a mesh.
+pub(super) fn read_with_normals(
+    bytes: &[u8],
+) -> Result<(TriangleSoup, Vec<[f64; 3]>), MeshReadError> {
     let header = header(bytes)?;
     let mut body = match header.encoding {
         Encoding::Ascii => Body::Ascii(Tokens::new(&bytes[header.body..], header.body_line)),
@@ -277,7 +290,10 @@ pub(super) fn read(bytes: &[u8]) -> Result<TriangleSoup, MeshReadError> {
     read_body(&header, &mut body)
 }
 
-fn read_body(header: &Header, body: &mut Body<'_>) -> Result<TriangleSoup, MeshReadError> {
+fn read_body(
+    header: &Header,
+    body: &mut Body<'_>,
+) -> Result<(TriangleSoup, Vec<[f64; 3]>), MeshReadError> {
     let vertex = header.elements.iter().find(|e| e.name == b"vertex");
     let Some(vertex) = vertex else {
         return Err(MeshReadError::Unsupported {
@@ -302,6 +318,13 @@ fn read_body(header: &Header, body: &mut Body<'_>) -> Result<TriangleSoup, MeshR
             });
         }
     }
+    let has_normals = (0..3).all(|axis| {
+        vertex
+            .properties
+            .iter()
+            .any(|p| p.role == Role::Normal(axis))
+    });
+    let mut normals = Vec::new();
     let vertex_count = usize::try_from(vertex.count).unwrap_or(usize::MAX);
     let mut soup = TriangleSoup {
         positions: Vec::with_capacity(vertex_count.min(body.remaining() / 3)),
@@ -322,13 +345,16 @@ fn read_body(header: &Header, body: &mut Body<'_>) -> Result<TriangleSoup, MeshR
         for instance in 0..element.count {
             let what = || format!("{name} {instance} of the {} declared", element.count);
             let mut p = [0.0; 3];
+            let mut normal = [0.0; 3];
             let at = body.at();
             for property in &element.properties {
                 match property.kind {
                     Kind::Scalar(ty) => {
                         let v = body.value(ty, &what)?;
-                        if let Role::Coordinate(axis) = property.role {
-                            p[axis] = v;
+                        match property.role {
+                            Role::Coordinate(axis) => p[axis] = v,
+                            Role::Normal(axis) => normal[axis] = v,
+                            _ => {}
                         }
                     }
                     Kind::List { count, item } => {
@@ -373,6 +399,9 @@ fn read_body(header: &Header, body: &mut Body<'_>) -> Result<TriangleSoup, MeshR
                 }
             }
             if element.name == b"vertex" {
+                if has_normals {
+                    normals.push(normal);
+                }
                 if let Some(&c) = p.iter().find(|c| !c.is_finite()) {
                     return Err(MeshReadError::NonFinite {
                         format: Format::Ply,
@@ -395,5 +424,5 @@ fn read_body(header: &Header, body: &mut Body<'_>) -> Result<TriangleSoup, MeshR
             what: "a `face` element without a `vertex_indices` list".into(),
         });
     }
-    Ok(soup)
+    Ok((soup, normals))
 }
