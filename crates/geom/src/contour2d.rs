@@ -54,9 +54,9 @@
 
 use crate::contour::table::{CORNER_SLOT, EDGE_CORNERS, HI_SLOT, tables};
 use crate::contour::{apart_in_f32, band_crossing, spans_band};
-use crate::element::lattice_clip;
 use crate::field::Band;
 use crate::mesh::{Mesh, inseparable_edge, round_inside};
+use crate::simplex_contour::contour_triangle;
 use rayon::prelude::*;
 
 /// A 2D reference element (docs/method.md §Reference elements), in Cartesian coordinates.
@@ -207,17 +207,11 @@ pub fn contour_planar(
                 origin: [-0.5, -0.5],
                 axes: [[h, 0.0], [0.0, h]],
                 counts: [samples, samples],
-                clip_triangle: false,
             }
         }
         Element2::Triangle => {
-            let h = 1.0 / ((samples - 1) as f64 + 1.0 / 3.0);
-            Lattice {
-                origin: TRIANGLE_VERTICES[0],
-                axes: [[h, 0.0], [0.5 * h, 0.5 * SQRT3 * h]],
-                counts: [samples + 1, samples + 1],
-                clip_triangle: true,
-            }
+            let contoured = contour_triangle(field, samples - 1);
+            return Ok(region_from(contoured.mesh, contoured.positions));
         }
     };
     Ok(region_of(&lattice, field, None))
@@ -283,7 +277,6 @@ fn box_lattice(
             [0.0, (max[1] - min[1]) / (counts[1] - 1) as f64],
         ],
         counts,
-        clip_triangle: false,
     };
     for (axis, &count) in counts.iter().enumerate() {
         let coordinate = |i: usize| lattice.point_on(axis, i as f64);
@@ -310,6 +303,11 @@ fn region_of(
         None => march(lattice, &values),
         Some(band) => march_band(lattice, &values, band),
     };
+    region_from(mesh, positions)
+}
+
+/// A region from its mesh and full-precision positions: its boundary loops added.
+fn region_from(mesh: Mesh, positions: Vec<[f64; 2]>) -> PlanarRegion {
     let boundary: Vec<Vec<[f64; 2]>> = boundary_loops(&mesh)
         .iter()
         .map(|l| l.iter().map(|&v| positions[v as usize]).collect())
@@ -326,8 +324,6 @@ struct Lattice {
     origin: [f64; 2],
     axes: [[f64; 2]; 2],
     counts: [usize; 2],
-    /// Clip by the triangle's third side `u + v ≤ 1`, with `u = i·h`, `v = j·h`.
-    clip_triangle: bool,
 }
 
 impl Lattice {
@@ -350,17 +346,10 @@ impl Lattice {
     /// The clipped field at every node, `i` fastest.
     fn sample(&self, field: &(dyn Fn([f64; 2]) -> f64 + Sync)) -> Vec<f64> {
         let [nx, ny] = self.counts;
-        // The skew lattice has equal spacing on both axes; `axes[0][0]` is that spacing.
-        let h = self.axes[0][0];
         let mut values = Vec::with_capacity(nx * ny);
         for j in 0..ny {
             for i in 0..nx {
-                let phi = field(self.point(i as f64, j as f64));
-                values.push(if self.clip_triangle {
-                    lattice_clip(phi, i + j, nx - 2, h)
-                } else {
-                    phi
-                });
+                values.push(field(self.point(i as f64, j as f64)));
             }
         }
         values

@@ -44,9 +44,9 @@
 //! than a sample spacing.
 
 use crate::contour::{BandMesh, ContourError, contour, contour_band};
-use crate::field::{Band, Grid, PlaneSampler, ScalarField};
+use crate::field::{Band, Grid, ScalarField};
 use crate::mesh::Mesh;
-use std::ops::Range;
+use crate::simplex_contour::contour_tetrahedron;
 
 /// A 3D reference element (docs/method.md §Reference elements).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -146,25 +146,7 @@ pub fn contour_clipped(
             let sampler = field.sampler(&grid);
             contour(sampler.as_ref(), &grid, progress)
         }
-        Element3::Tetrahedron => {
-            let cells = (samples - 1) as f64;
-            let h = 1.0 / (cells + 1.0 / 3.0);
-            let grid = Grid {
-                origin: [0.0; 3],
-                spacing: [h; 3],
-                counts: [samples + 1; 3],
-            };
-            let sampler = TetrahedronSampler {
-                field,
-                grid,
-                cells: samples - 1,
-            };
-            let mut mesh = contour(&sampler, &grid, progress)?;
-            for v in &mut mesh.vertices {
-                *v = tetrahedron_point(v.map(f64::from)).map(|c| c as f32);
-            }
-            Ok(mesh)
-        }
+        Element3::Tetrahedron => Ok(contour_tetrahedron(field, samples - 1, progress).mesh),
     }
 }
 
@@ -195,57 +177,4 @@ pub fn contour_cube_band(
 #[inline]
 pub(crate) fn tetrahedron_point([u, v, w]: [f64; 3]) -> [f64; 3] {
     [-0.5 + u + w, -0.5 + u + v, -0.5 + v + w]
-}
-
-/// Samples the clipped field on the tetrahedron's lattice grid (see [`lattice_clip`]).
-struct TetrahedronSampler<'a> {
-    field: &'a dyn ScalarField,
-    grid: Grid,
-    /// Cells along each edge of the tetrahedron: the far face lies between node layers
-    /// `i + j + k = cells` and `cells + 1`.
-    cells: usize,
-}
-
-impl PlaneSampler for TetrahedronSampler<'_> {
-    fn grid(&self) -> &Grid {
-        &self.grid
-    }
-
-    fn sample_rows(&self, k: usize, rows: Range<usize>, out: &mut [f64]) {
-        let nx = self.grid.counts[0];
-        let h = self.grid.spacing[0];
-        let w = self.grid.coord(2, k);
-        let (mut xs, mut ys, mut zs) = (vec![0.0; nx], vec![0.0; nx], vec![0.0; nx]);
-        for (j, row) in rows.zip(out.chunks_mut(nx)) {
-            let v = self.grid.coord(1, j);
-            for i in 0..nx {
-                let [x, y, z] = tetrahedron_point([self.grid.coord(0, i), v, w]);
-                (xs[i], ys[i], zs[i]) = (x, y, z);
-            }
-            self.field.eval_points(&xs, &ys, &zs, row);
-            for (i, value) in row.iter_mut().enumerate() {
-                *value = lattice_clip(*value, i + j + k, self.cells, h);
-            }
-        }
-    }
-}
-
-/// The sample at a node of layer `m = i + j + k` (or `i + j` in 2D) of a corner-simplex lattice
-/// with `cells` cells per edge and spacing `h`, given the field value `phi` there. Its sign is
-/// that of `max(phi, c)` with the clip `c = m·h − 1`; its value is `phi` deeper than layer
-/// `cells`, `c` on the two layers straddling the far face where `phi < 0` (so crossings of the
-/// face are exactly on it), and `max(phi, c)` otherwise. NaN stays NaN (outside): `f64::max`
-/// would return `c` and turn an undefined point inside the element into solid.
-#[inline]
-pub(crate) fn lattice_clip(phi: f64, m: usize, cells: usize, h: f64) -> f64 {
-    let c = m as f64 * h - 1.0;
-    if m < cells {
-        phi
-    } else if phi < 0.0 {
-        c
-    } else if phi.is_nan() {
-        phi
-    } else {
-        phi.max(c)
-    }
 }

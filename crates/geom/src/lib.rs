@@ -26,6 +26,7 @@ pub mod mesh_sdf;
 pub mod periodic;
 pub mod scaffold;
 mod scalar;
+mod simplex_contour;
 pub mod spelling;
 pub mod stack_lang;
 pub mod symmetric;
