@@ -26,15 +26,11 @@
 //! Grids, chosen so that the element's sides are exact:
 //! - **Square**: `samples` points per axis spanning the square; its sides are the grid's
 //!   boundary, so the element clips itself and `Φ` is contoured as is.
-//! - **Triangle**: the grid is laid on the triangle's skew lattice (docs/method.md §Frames),
-//!   `x = q0 + u e1 + v e2` with `q0 = (-½, -√3/6)`, `e1 = (1, 0)`, `e2 = (½, √3/2)`. Two sides
-//!   are the grid lines `u = 0` and `v = 0`; the third is the zero set of the linear clip
-//!   `c = u + v − 1`, combined with `Φ` as in 3D (the sign of `max(Φ, c)`, with node values
-//!   chosen so that both the field's crossings and the side's are exact away from where they
-//!   meet; see `element::lattice_clip`). The spacing `h = 1 / (N + ⅓)` keeps `c` away from zero at every
-//!   node (crossings of `c` sit a third of the way along their edge) and the grid ends one
-//!   line past the side, where every node is outside. An axis-aligned grid would round off the
-//!   corners; this one reproduces the triangle exactly for a constant-inside field.
+//! - **Triangle**: the triangle's own subdivision into small triangles, `samples` nodes along
+//!   each side, contoured by marching triangles (`simplex_contour`). The group D3 maps its nodes
+//!   and cells onto themselves, so every side is cut alike (all three corners are nodes) and the
+//!   region is symmetric to rounding; the sides are cell edges, so they are exact. Cells are
+//!   triangles, so no cell is ambiguous and the face rule above concerns the square alone.
 //!
 //! Invariants of the output:
 //! - Triangles are counter-clockwise seen from +z; vertices are shared (an interior edge is used
@@ -185,8 +181,7 @@ pub enum PlanarError {
 const EDGE_MARGIN: f64 = 1.0 / 256.0;
 
 /// Contours `{Φ ≤ 0} ∩ element` (see the module docs). `samples` is the number of samples per
-/// axis of the square, or along each side of the triangle (whose grid adds one line of outside
-/// samples); at least 2.
+/// axis of the square, or along each side of the triangle; at least 2.
 pub fn contour_planar(
     field: &(dyn Fn([f64; 2]) -> f64 + Sync),
     element: Element2,
@@ -343,7 +338,7 @@ impl Lattice {
         self.axes[0][1] == 0.0 && self.axes[1][0] == 0.0
     }
 
-    /// The clipped field at every node, `i` fastest.
+    /// The field at every node, `i` fastest.
     fn sample(&self, field: &(dyn Fn([f64; 2]) -> f64 + Sync)) -> Vec<f64> {
         let [nx, ny] = self.counts;
         let mut values = Vec::with_capacity(nx * ny);

@@ -1,46 +1,27 @@
 //! A field clipped to a 3D reference element, contoured as one closed mesh.
 //!
 //! Reference elements are those of `docs/method.md` §Reference elements: the cube `[-½, ½]³` and
-//! the
-//! regular tetrahedron inscribed in it with vertices `p0 = (-½,-½,-½)`, `p1 = (½,½,-½)`,
+//! the regular tetrahedron inscribed in it with vertices `p0 = (-½,-½,-½)`, `p1 = (½,½,-½)`,
 //! `p2 = (-½,½,½)`, `p3 = (½,-½,½)`.
 //!
 //! [`contour_clipped`] returns the solid `{Φ ≤ 0} ∩ element` (negative inside, as everywhere in
-//! this crate) as one closed, manifold, outward-oriented [`Mesh`]. It contours a function with
-//! the sign of `max(Φ, c)`, where `c` is a clipping function of the element (negative inside),
-//! with the streaming contourer, which caps the solid on its grid's box. How the grid is chosen
+//! this crate) as one closed, manifold, outward-oriented [`Mesh`]. How the samples are laid out
 //! is what makes the element's faces exact:
 //!
-//! - **Cube**: the grid spans the cube exactly, so the element's faces are the box faces and the
-//!   contourer's caps are exact planar faces. Inside the box `c ≤ 0`, so `g = Φ` there: `c` is
-//!   never sampled (it is zero on the faces, and a zero sample would count as outside).
-//! - **Tetrahedron**: an axis-aligned grid cannot reproduce it: its edges are diagonals of the
-//!   cube's faces, which run through grid nodes, so every cell along them bevels the edge and the
-//!   volume error is O(h²). Instead the grid is laid on the tetrahedron's own affine lattice,
-//!   `x = p0 + u (p1 − p0) + v (p2 − p0) + w (p3 − p0)`: three faces are `u = 0`, `v = 0`,
-//!   `w = 0`, i.e. box faces with exact caps, and the fourth is the zero set of the linear clip
-//!   `c = u + v + w − 1`. The spacing is `h = 1 / (N + ⅓)` for `N` cells along an edge, so at
-//!   node `(i, j, k)` `c = h·m − 1` with `m = i + j + k`, never zero: every grid edge crossing
-//!   the face runs from layer `m = N` (`c = −h/3`) to `m = N + 1` (`c = 2h/3`), a third of the
-//!   way along. The box ends one layer past the face, where every node is outside, so those box
-//!   faces get no caps. The map has determinant 2 > 0, so it keeps the outward winding.
+//! - **Cube**: the streaming contourer's grid spans the cube exactly, so the element's faces are
+//!   the box faces and the contourer's caps (it caps the solid on its grid's box) are exact
+//!   planar faces; `Φ` is contoured as it is.
+//! - **Tetrahedron**: an axis-aligned grid cannot reproduce it (its edges are diagonals of the
+//!   cube's faces, beveled by every cell along them), and a lattice laid from one vertex treats
+//!   the far face differently from the other three. It is contoured on its own symmetric
+//!   subdivision instead, by marching tetrahedra with caps on its faces
+//!   (`simplex_contour`): every face exact, the result symmetric under Td to rounding.
 //!
-//! Only the signs of the samples decide the topology; the values decide where crossings go,
-//! and each node's value serves the edges it touches. So the sampled function has the sign of
-//! `max(Φ, c)` everywhere, with these values (`lattice_clip`): deeper than layer `N` it is
-//! `Φ` (plain `max(Φ, c)` would replace `Φ` by `c` wherever `c > Φ`, a thick layer near the face,
-//! and drag the field's own crossings towards inside nodes: −1.1 % of volume at 40 samples for a
-//! gyroid); on layers `N` and `N + 1`, where `Φ < 0` it is `c`, so every crossing of the face is
-//! exactly on it, and elsewhere `max(Φ, c)`. The clipped solid is therefore reproduced exactly
-//! except in the cells where the field's surface meets the face (the crease, O(h²) in volume); a
-//! constant-inside field gives the tetrahedron itself up to `f32` rounding.
-//!
-//! NaN samples of `Φ` count as outside, as in the contourer (the clip never hides them).
+//! NaN samples of `Φ` count as outside, as in the contourer.
 //!
 //! A shell over the cube is a band of the field clipped by the box alone, so
 //! [`contour_cube_band`] contours it with the two-level contourer (a wall between two samples
-//! is kept). Over the tetrahedron the clip is a third surface the band cannot combine with:
-//! a shell there is `|f − c| − w/2` through [`contour_clipped`], which can lose walls thinner
+//! is kept). Over the tetrahedron the two-level rule is not implemented: a shell there is `|f − c| − w/2` through [`contour_clipped`], which can lose walls thinner
 //! than a sample spacing.
 
 use crate::contour::{BandMesh, ContourError, contour, contour_band};
@@ -118,9 +99,8 @@ const MAX_PLANE_SAMPLES: u64 = u32::MAX as u64;
 
 /// Contours `{Φ ≤ 0} ∩ element` as one closed, manifold, outward mesh (see the module docs for
 /// the grid). `samples` is the number of samples along each edge direction of the element
-/// (at least 2): per axis of the cube; per edge `p0 p_i` of the tetrahedron, whose grid adds
-/// one layer of outside samples. `progress(n)` reports completed cube layers, as in
-/// [`contour`].
+/// (at least 2): per axis of the cube; per edge of the tetrahedron. `progress(n)` reports
+/// completed layers (`samples − 1` in all), as in [`contour`].
 pub fn contour_clipped(
     field: &dyn ScalarField,
     element: Element3,

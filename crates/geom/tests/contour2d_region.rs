@@ -117,7 +117,7 @@ fn contour2d_constant_inside_field_covers_the_element_exactly() {
             }
         }
     }
-    // A shallow constant too: the clip decides the triangle's third side.
+    // A shallow constant too: the triangle's sides are its subdivision's.
     let r = region(|_| -1e-3, Element2::Triangle, 30);
     assert!((r.area() - Element2::Triangle.area()).abs() < 1e-9);
 }

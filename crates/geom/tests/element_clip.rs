@@ -57,8 +57,8 @@ fn element_gyroid_clipped_is_closed_manifold_and_inside_the_element() {
 fn element_gyroid_halves_fill_the_element() {
     // The sheet splits each element into two solids, Φ ≤ 0 and −Φ ≤ 0, whose volumes add up to
     // the element's. In the cube the box caps are exact, so only the face rule's choices differ.
-    // In the tetrahedron the cells where the sheet meets the lattice's far face (the crease of
-    // the clip) are approximated, so the sum converges at second order instead.
+    // In the tetrahedron the halves are the two sides of one linear interpolant in each small
+    // tetrahedron: they fill it but where crossings are kept off a node (and it converges).
     let halves = |element: Element3, samples: usize| {
         let a = assert_closed(&clipped(gyroid, element, samples), "inside");
         let b = assert_closed(&clipped(|p| -gyroid(p), element, samples), "outside");
@@ -91,7 +91,7 @@ fn element_constant_inside_field_gives_the_element_exactly() {
             );
         }
     }
-    // A shallow constant (above the lattice's lowest clip value) still gives the element.
+    // A shallow constant still gives the element: its faces are the subdivision's.
     let mesh = clipped(|_| -0.01, Element3::Tetrahedron, 20);
     let volume = assert_closed(&mesh, "shallow");
     assert!((volume * 3.0 - 1.0).abs() < 1e-6, "shallow: {volume}");

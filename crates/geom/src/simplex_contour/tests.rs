@@ -42,7 +42,7 @@ fn td_operators() -> Vec<[[f64; 3]; 3]> {
     let mut ops = Vec::new();
     for p in perms {
         for signs in 0..8 {
-            let s = |a: usize| if signs >> a & 1 == 1 { -1.0 } else { 1.0 };
+            let s = |a: usize| if (signs >> a) & 1 == 1 { -1.0 } else { 1.0 };
             let m: [[f64; 3]; 3] = std::array::from_fn(|r| {
                 std::array::from_fn(|c| if p[r] == c { s(r) } else { 0.0 })
             });
