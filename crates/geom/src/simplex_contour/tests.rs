@@ -5,6 +5,9 @@ use super::*;
 use crate::validate::{check, components};
 use std::f64::consts::TAU;
 
+/// A field of the position, as the tests pass it around.
+type Field3 = dyn Fn([f64; 3]) -> f64 + Sync;
+
 /// A field given by a closure of the position.
 struct FnField<F>(F);
 
@@ -116,7 +119,7 @@ fn monte_carlo_volume(f: impl Fn([f64; 3]) -> f64, n: usize) -> f64 {
 fn tetrahedron_output_is_symmetric_under_td_closed_and_on_the_face_planes() {
     // The high side of the Td cell (one body reaching every face) and its low side (a piece
     // at each vertex) at two resolutions.
-    let fields: [(&str, &(dyn Fn([f64; 3]) -> f64 + Sync)); 2] = [
+    let fields: [(&str, &Field3); 2] = [
         ("high", &|p| 0.4 - td_cell(p)),
         ("low", &|p| td_cell(p) - 0.1),
     ];
