@@ -33,8 +33,9 @@ use crate::progress::StageProgress;
 
 /// 3: shells contoured as bands of the field, with their wall in the payload. 4: sized
 /// solids (`wall`, `grow`, `volume_fraction`) and their summary in the payload. 5: point
-/// distances (tetrahedra, planar regions) projected onto the surface.
-pub const VERSION: u32 = 5;
+/// distances (tetrahedra, planar regions) projected onto the surface. 6: the tetrahedron and
+/// triangle elements contoured on their symmetric subdivisions.
+pub const VERSION: u32 = 6;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct ContourStage {

@@ -26,15 +26,11 @@
 //! Grids, chosen so that the element's sides are exact:
 //! - **Square**: `samples` points per axis spanning the square; its sides are the grid's
 //!   boundary, so the element clips itself and `Φ` is contoured as is.
-//! - **Triangle**: the grid is laid on the triangle's skew lattice (docs/method.md §Frames),
-//!   `x = q0 + u e1 + v e2` with `q0 = (-½, -√3/6)`, `e1 = (1, 0)`, `e2 = (½, √3/2)`. Two sides
-//!   are the grid lines `u = 0` and `v = 0`; the third is the zero set of the linear clip
-//!   `c = u + v − 1`, combined with `Φ` as in 3D (the sign of `max(Φ, c)`, with node values
-//!   chosen so that both the field's crossings and the side's are exact away from where they
-//!   meet; see `element::lattice_clip`). The spacing `h = 1 / (N + ⅓)` keeps `c` away from zero at every
-//!   node (crossings of `c` sit a third of the way along their edge) and the grid ends one
-//!   line past the side, where every node is outside. An axis-aligned grid would round off the
-//!   corners; this one reproduces the triangle exactly for a constant-inside field.
+//! - **Triangle**: the triangle's own subdivision into small triangles, `samples` nodes along
+//!   each side, contoured by marching triangles (`simplex_contour`). The group D3 maps its nodes
+//!   and cells onto themselves, so every side is cut alike (all three corners are nodes) and the
+//!   region is symmetric to rounding; the sides are cell edges, so they are exact. Cells are
+//!   triangles, so no cell is ambiguous and the face rule above concerns the square alone.
 //!
 //! Invariants of the output:
 //! - Triangles are counter-clockwise seen from +z; vertices are shared (an interior edge is used
@@ -54,9 +50,9 @@
 
 use crate::contour::table::{CORNER_SLOT, EDGE_CORNERS, HI_SLOT, tables};
 use crate::contour::{apart_in_f32, band_crossing, spans_band};
-use crate::element::lattice_clip;
 use crate::field::Band;
 use crate::mesh::{Mesh, inseparable_edge, round_inside};
+use crate::simplex_contour::contour_triangle;
 use rayon::prelude::*;
 
 /// A 2D reference element (docs/method.md §Reference elements), in Cartesian coordinates.
@@ -185,8 +181,7 @@ pub enum PlanarError {
 const EDGE_MARGIN: f64 = 1.0 / 256.0;
 
 /// Contours `{Φ ≤ 0} ∩ element` (see the module docs). `samples` is the number of samples per
-/// axis of the square, or along each side of the triangle (whose grid adds one line of outside
-/// samples); at least 2.
+/// axis of the square, or along each side of the triangle; at least 2.
 pub fn contour_planar(
     field: &(dyn Fn([f64; 2]) -> f64 + Sync),
     element: Element2,
@@ -207,17 +202,11 @@ pub fn contour_planar(
                 origin: [-0.5, -0.5],
                 axes: [[h, 0.0], [0.0, h]],
                 counts: [samples, samples],
-                clip_triangle: false,
             }
         }
         Element2::Triangle => {
-            let h = 1.0 / ((samples - 1) as f64 + 1.0 / 3.0);
-            Lattice {
-                origin: TRIANGLE_VERTICES[0],
-                axes: [[h, 0.0], [0.5 * h, 0.5 * SQRT3 * h]],
-                counts: [samples + 1, samples + 1],
-                clip_triangle: true,
-            }
+            let contoured = contour_triangle(field, samples - 1);
+            return Ok(region_from(contoured.mesh, contoured.positions));
         }
     };
     Ok(region_of(&lattice, field, None))
@@ -283,7 +272,6 @@ fn box_lattice(
             [0.0, (max[1] - min[1]) / (counts[1] - 1) as f64],
         ],
         counts,
-        clip_triangle: false,
     };
     for (axis, &count) in counts.iter().enumerate() {
         let coordinate = |i: usize| lattice.point_on(axis, i as f64);
@@ -310,6 +298,11 @@ fn region_of(
         None => march(lattice, &values),
         Some(band) => march_band(lattice, &values, band),
     };
+    region_from(mesh, positions)
+}
+
+/// A region from its mesh and full-precision positions: its boundary loops added.
+fn region_from(mesh: Mesh, positions: Vec<[f64; 2]>) -> PlanarRegion {
     let boundary: Vec<Vec<[f64; 2]>> = boundary_loops(&mesh)
         .iter()
         .map(|l| l.iter().map(|&v| positions[v as usize]).collect())
@@ -326,8 +319,6 @@ struct Lattice {
     origin: [f64; 2],
     axes: [[f64; 2]; 2],
     counts: [usize; 2],
-    /// Clip by the triangle's third side `u + v ≤ 1`, with `u = i·h`, `v = j·h`.
-    clip_triangle: bool,
 }
 
 impl Lattice {
@@ -347,20 +338,13 @@ impl Lattice {
         self.axes[0][1] == 0.0 && self.axes[1][0] == 0.0
     }
 
-    /// The clipped field at every node, `i` fastest.
+    /// The field at every node, `i` fastest.
     fn sample(&self, field: &(dyn Fn([f64; 2]) -> f64 + Sync)) -> Vec<f64> {
         let [nx, ny] = self.counts;
-        // The skew lattice has equal spacing on both axes; `axes[0][0]` is that spacing.
-        let h = self.axes[0][0];
         let mut values = Vec::with_capacity(nx * ny);
         for j in 0..ny {
             for i in 0..nx {
-                let phi = field(self.point(i as f64, j as f64));
-                values.push(if self.clip_triangle {
-                    lattice_clip(phi, i + j, nx - 2, h)
-                } else {
-                    phi
-                });
+                values.push(field(self.point(i as f64, j as f64)));
             }
         }
         values

@@ -1,52 +1,33 @@
 //! A field clipped to a 3D reference element, contoured as one closed mesh.
 //!
 //! Reference elements are those of `docs/method.md` §Reference elements: the cube `[-½, ½]³` and
-//! the
-//! regular tetrahedron inscribed in it with vertices `p0 = (-½,-½,-½)`, `p1 = (½,½,-½)`,
+//! the regular tetrahedron inscribed in it with vertices `p0 = (-½,-½,-½)`, `p1 = (½,½,-½)`,
 //! `p2 = (-½,½,½)`, `p3 = (½,-½,½)`.
 //!
 //! [`contour_clipped`] returns the solid `{Φ ≤ 0} ∩ element` (negative inside, as everywhere in
-//! this crate) as one closed, manifold, outward-oriented [`Mesh`]. It contours a function with
-//! the sign of `max(Φ, c)`, where `c` is a clipping function of the element (negative inside),
-//! with the streaming contourer, which caps the solid on its grid's box. How the grid is chosen
+//! this crate) as one closed, manifold, outward-oriented [`Mesh`]. How the samples are laid out
 //! is what makes the element's faces exact:
 //!
-//! - **Cube**: the grid spans the cube exactly, so the element's faces are the box faces and the
-//!   contourer's caps are exact planar faces. Inside the box `c ≤ 0`, so `g = Φ` there: `c` is
-//!   never sampled (it is zero on the faces, and a zero sample would count as outside).
-//! - **Tetrahedron**: an axis-aligned grid cannot reproduce it: its edges are diagonals of the
-//!   cube's faces, which run through grid nodes, so every cell along them bevels the edge and the
-//!   volume error is O(h²). Instead the grid is laid on the tetrahedron's own affine lattice,
-//!   `x = p0 + u (p1 − p0) + v (p2 − p0) + w (p3 − p0)`: three faces are `u = 0`, `v = 0`,
-//!   `w = 0`, i.e. box faces with exact caps, and the fourth is the zero set of the linear clip
-//!   `c = u + v + w − 1`. The spacing is `h = 1 / (N + ⅓)` for `N` cells along an edge, so at
-//!   node `(i, j, k)` `c = h·m − 1` with `m = i + j + k`, never zero: every grid edge crossing
-//!   the face runs from layer `m = N` (`c = −h/3`) to `m = N + 1` (`c = 2h/3`), a third of the
-//!   way along. The box ends one layer past the face, where every node is outside, so those box
-//!   faces get no caps. The map has determinant 2 > 0, so it keeps the outward winding.
+//! - **Cube**: the streaming contourer's grid spans the cube exactly, so the element's faces are
+//!   the box faces and the contourer's caps (it caps the solid on its grid's box) are exact
+//!   planar faces; `Φ` is contoured as it is.
+//! - **Tetrahedron**: an axis-aligned grid cannot reproduce it (its edges are diagonals of the
+//!   cube's faces, beveled by every cell along them), and a lattice laid from one vertex treats
+//!   the far face differently from the other three. It is contoured on its own symmetric
+//!   subdivision instead, by marching tetrahedra with caps on its faces
+//!   (`simplex_contour`): every face exact, the result symmetric under Td to rounding.
 //!
-//! Only the signs of the samples decide the topology; the values decide where crossings go,
-//! and each node's value serves the edges it touches. So the sampled function has the sign of
-//! `max(Φ, c)` everywhere, with these values (`lattice_clip`): deeper than layer `N` it is
-//! `Φ` (plain `max(Φ, c)` would replace `Φ` by `c` wherever `c > Φ`, a thick layer near the face,
-//! and drag the field's own crossings towards inside nodes: −1.1 % of volume at 40 samples for a
-//! gyroid); on layers `N` and `N + 1`, where `Φ < 0` it is `c`, so every crossing of the face is
-//! exactly on it, and elsewhere `max(Φ, c)`. The clipped solid is therefore reproduced exactly
-//! except in the cells where the field's surface meets the face (the crease, O(h²) in volume); a
-//! constant-inside field gives the tetrahedron itself up to `f32` rounding.
-//!
-//! NaN samples of `Φ` count as outside, as in the contourer (the clip never hides them).
+//! NaN samples of `Φ` count as outside, as in the contourer.
 //!
 //! A shell over the cube is a band of the field clipped by the box alone, so
 //! [`contour_cube_band`] contours it with the two-level contourer (a wall between two samples
-//! is kept). Over the tetrahedron the clip is a third surface the band cannot combine with:
-//! a shell there is `|f − c| − w/2` through [`contour_clipped`], which can lose walls thinner
+//! is kept). Over the tetrahedron the two-level rule is not implemented: a shell there is `|f − c| − w/2` through [`contour_clipped`], which can lose walls thinner
 //! than a sample spacing.
 
 use crate::contour::{BandMesh, ContourError, contour, contour_band};
-use crate::field::{Band, Grid, PlaneSampler, ScalarField};
+use crate::field::{Band, Grid, ScalarField};
 use crate::mesh::Mesh;
-use std::ops::Range;
+use crate::simplex_contour::contour_tetrahedron;
 
 /// A 3D reference element (docs/method.md §Reference elements).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -118,9 +99,8 @@ const MAX_PLANE_SAMPLES: u64 = u32::MAX as u64;
 
 /// Contours `{Φ ≤ 0} ∩ element` as one closed, manifold, outward mesh (see the module docs for
 /// the grid). `samples` is the number of samples along each edge direction of the element
-/// (at least 2): per axis of the cube; per edge `p0 p_i` of the tetrahedron, whose grid adds
-/// one layer of outside samples. `progress(n)` reports completed cube layers, as in
-/// [`contour`].
+/// (at least 2): per axis of the cube; per edge of the tetrahedron. `progress(n)` reports
+/// completed layers (`samples − 1` in all), as in [`contour`].
 pub fn contour_clipped(
     field: &dyn ScalarField,
     element: Element3,
@@ -146,25 +126,7 @@ pub fn contour_clipped(
             let sampler = field.sampler(&grid);
             contour(sampler.as_ref(), &grid, progress)
         }
-        Element3::Tetrahedron => {
-            let cells = (samples - 1) as f64;
-            let h = 1.0 / (cells + 1.0 / 3.0);
-            let grid = Grid {
-                origin: [0.0; 3],
-                spacing: [h; 3],
-                counts: [samples + 1; 3],
-            };
-            let sampler = TetrahedronSampler {
-                field,
-                grid,
-                cells: samples - 1,
-            };
-            let mut mesh = contour(&sampler, &grid, progress)?;
-            for v in &mut mesh.vertices {
-                *v = tetrahedron_point(v.map(f64::from)).map(|c| c as f32);
-            }
-            Ok(mesh)
-        }
+        Element3::Tetrahedron => Ok(contour_tetrahedron(field, samples - 1, progress).mesh),
     }
 }
 
@@ -195,57 +157,4 @@ pub fn contour_cube_band(
 #[inline]
 pub(crate) fn tetrahedron_point([u, v, w]: [f64; 3]) -> [f64; 3] {
     [-0.5 + u + w, -0.5 + u + v, -0.5 + v + w]
-}
-
-/// Samples the clipped field on the tetrahedron's lattice grid (see [`lattice_clip`]).
-struct TetrahedronSampler<'a> {
-    field: &'a dyn ScalarField,
-    grid: Grid,
-    /// Cells along each edge of the tetrahedron: the far face lies between node layers
-    /// `i + j + k = cells` and `cells + 1`.
-    cells: usize,
-}
-
-impl PlaneSampler for TetrahedronSampler<'_> {
-    fn grid(&self) -> &Grid {
-        &self.grid
-    }
-
-    fn sample_rows(&self, k: usize, rows: Range<usize>, out: &mut [f64]) {
-        let nx = self.grid.counts[0];
-        let h = self.grid.spacing[0];
-        let w = self.grid.coord(2, k);
-        let (mut xs, mut ys, mut zs) = (vec![0.0; nx], vec![0.0; nx], vec![0.0; nx]);
-        for (j, row) in rows.zip(out.chunks_mut(nx)) {
-            let v = self.grid.coord(1, j);
-            for i in 0..nx {
-                let [x, y, z] = tetrahedron_point([self.grid.coord(0, i), v, w]);
-                (xs[i], ys[i], zs[i]) = (x, y, z);
-            }
-            self.field.eval_points(&xs, &ys, &zs, row);
-            for (i, value) in row.iter_mut().enumerate() {
-                *value = lattice_clip(*value, i + j + k, self.cells, h);
-            }
-        }
-    }
-}
-
-/// The sample at a node of layer `m = i + j + k` (or `i + j` in 2D) of a corner-simplex lattice
-/// with `cells` cells per edge and spacing `h`, given the field value `phi` there. Its sign is
-/// that of `max(phi, c)` with the clip `c = m·h − 1`; its value is `phi` deeper than layer
-/// `cells`, `c` on the two layers straddling the far face where `phi < 0` (so crossings of the
-/// face are exactly on it), and `max(phi, c)` otherwise. NaN stays NaN (outside): `f64::max`
-/// would return `c` and turn an undefined point inside the element into solid.
-#[inline]
-pub(crate) fn lattice_clip(phi: f64, m: usize, cells: usize, h: f64) -> f64 {
-    let c = m as f64 * h - 1.0;
-    if m < cells {
-        phi
-    } else if phi < 0.0 {
-        c
-    } else if phi.is_nan() {
-        phi
-    } else {
-        phi.max(c)
-    }
 }

@@ -27,6 +27,7 @@ pub mod periodic;
 pub mod point_cloud;
 pub mod scaffold;
 mod scalar;
+mod simplex_contour;
 pub mod spelling;
 pub mod stack_lang;
 pub mod symmetric;

@@ -117,7 +117,7 @@ fn contour2d_constant_inside_field_covers_the_element_exactly() {
             }
         }
     }
-    // A shallow constant too: the clip decides the triangle's third side.
+    // A shallow constant too: the triangle's sides are its subdivision's.
     let r = region(|_| -1e-3, Element2::Triangle, 30);
     assert!((r.area() - Element2::Triangle.area()).abs() < 1e-9);
 }
@@ -469,4 +469,36 @@ fn contour2d_far_bands_keep_distinct_f32_positions() {
         ),
         "{err:?}"
     );
+}
+
+#[test]
+fn contour2d_square_keeps_the_square_s_symmetry() {
+    // A D4-symmetric field (no sample zero to rounding): the region's full-precision vertices
+    // map onto themselves under the 8 signed permutations of the plane.
+    let t = 2.0 * PI;
+    let f = move |p: [f64; 2]| {
+        let (a, b) = ((t * p[0]).cos(), (t * p[1]).cos());
+        a + b + 0.5 * a * b + 0.05
+    };
+    let r = region(f, Element2::Square, 33);
+    let mut sorted = r.positions.clone();
+    sorted.sort_by(|a, b| a[0].total_cmp(&b[0]));
+    for swap in [false, true] {
+        for signs in 0..4 {
+            let s = |a: usize| if (signs >> a) & 1 == 1 { -1.0 } else { 1.0 };
+            for p in &r.positions {
+                let q = if swap { [p[1], p[0]] } else { *p };
+                let q = [s(0) * q[0], s(1) * q[1]];
+                let from = sorted.partition_point(|v| v[0] < q[0] - 1e-9);
+                let found = sorted[from..]
+                    .iter()
+                    .take_while(|v| v[0] <= q[0] + 1e-9)
+                    .any(|v| (v[1] - q[1]).abs() < 1e-9);
+                assert!(
+                    found,
+                    "image {q:?} of {p:?} (swap {swap}, signs {signs}) missing"
+                );
+            }
+        }
+    }
 }

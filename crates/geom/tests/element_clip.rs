@@ -57,8 +57,8 @@ fn element_gyroid_clipped_is_closed_manifold_and_inside_the_element() {
 fn element_gyroid_halves_fill_the_element() {
     // The sheet splits each element into two solids, Φ ≤ 0 and −Φ ≤ 0, whose volumes add up to
     // the element's. In the cube the box caps are exact, so only the face rule's choices differ.
-    // In the tetrahedron the cells where the sheet meets the lattice's far face (the crease of
-    // the clip) are approximated, so the sum converges at second order instead.
+    // In the tetrahedron the halves are the two sides of one linear interpolant in each small
+    // tetrahedron: they fill it but where crossings are kept off a node (and it converges).
     let halves = |element: Element3, samples: usize| {
         let a = assert_closed(&clipped(gyroid, element, samples), "inside");
         let b = assert_closed(&clipped(|p| -gyroid(p), element, samples), "outside");
@@ -91,7 +91,7 @@ fn element_constant_inside_field_gives_the_element_exactly() {
             );
         }
     }
-    // A shallow constant (above the lattice's lowest clip value) still gives the element.
+    // A shallow constant still gives the element: its faces are the subdivision's.
     let mesh = clipped(|_| -0.01, Element3::Tetrahedron, 20);
     let volume = assert_closed(&mesh, "shallow");
     assert!((volume * 3.0 - 1.0).abs() < 1e-6, "shallow: {volume}");
@@ -202,4 +202,55 @@ fn element_signed_distance_signs_and_bbox() {
     // Centroid to a tetrahedron face: the inradius.
     let tet = Element3::Tetrahedron.signed_distance([0.0; 3]);
     assert!((tet + 1.0 / (2.0 * 3f64.sqrt())).abs() < 1e-15);
+}
+
+/// The largest distance from an image of a vertex under `op` to the nearest vertex.
+fn worst_image_gap(vertices: &[[f32; 3]], op: impl Fn([f64; 3]) -> [f64; 3]) -> f64 {
+    let points: Vec<[f64; 3]> = vertices.iter().map(|v| v.map(f64::from)).collect();
+    let mut sorted = points.clone();
+    sorted.sort_by(|a, b| a[0].total_cmp(&b[0]));
+    let mut worst: f64 = 0.0;
+    for &p in &points {
+        let q = op(p);
+        let from = sorted.partition_point(|s| s[0] < q[0] - 1e-5);
+        let best = sorted[from..]
+            .iter()
+            .take_while(|s| s[0] <= q[0] + 1e-5)
+            .map(|s| (0..3).map(|d| (s[d] - q[d]).powi(2)).sum::<f64>().sqrt())
+            .fold(f64::INFINITY, f64::min);
+        worst = worst.max(best);
+    }
+    worst
+}
+
+#[test]
+fn element_cube_output_keeps_the_cube_s_symmetry() {
+    // An Oh-symmetric field (offset so that no sample is zero to rounding, where the sign and
+    // so the crossings would be decided by rounding): its clipped mesh maps onto itself under
+    // the 48 signed permutations, to f32 rounding.
+    let t = 2.0 * PI;
+    let wavy = move |p: [f64; 3]| {
+        let c = p.map(|x| (t * x).cos());
+        c[0] + c[1] + c[2] - 0.4 * c[0] * c[1] * c[2] + 0.05
+    };
+    let perms = [
+        [0, 1, 2],
+        [0, 2, 1],
+        [1, 0, 2],
+        [1, 2, 0],
+        [2, 0, 1],
+        [2, 1, 0],
+    ];
+    for samples in [17, 24] {
+        let mesh = clipped(wavy, Element3::Cube, samples);
+        assert_closed(&mesh, "wavy");
+        for p in perms {
+            for signs in 0..8 {
+                let s = |a: usize| if (signs >> a) & 1 == 1 { -1.0 } else { 1.0 };
+                let gap =
+                    worst_image_gap(&mesh.vertices, |v| std::array::from_fn(|a| s(a) * v[p[a]]));
+                assert!(gap < 1e-6, "{samples}: {p:?} signs {signs}: {gap}");
+            }
+        }
+    }
 }
