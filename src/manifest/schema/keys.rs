@@ -15,7 +15,7 @@ pub(super) const BUILD_KEYS: [&str; 3] = ["out_dir", "units", "report"];
 
 // `[cells.NAME]`.
 
-pub(super) const CELL_KEYS: [&str; 19] = [
+pub(super) const CELL_KEYS: [&str; 20] = [
     "tpms",
     "expr",
     "blend",
@@ -35,6 +35,7 @@ pub(super) const CELL_KEYS: [&str; 19] = [
     "normal_to_faces",
     "offset",
     "invert",
+    "optimize",
 ];
 
 /// The keys that give a cell its shape; a cell has exactly one.
@@ -49,19 +50,22 @@ pub(super) const SOURCE_KEYS: [&str; 7] = [
 ];
 
 /// The keys of a fitted cell other than `symmetry`, in the order they are documented.
-pub(super) const SYMMETRIC_KEYS: [&str; 6] = [
+pub(super) const SYMMETRIC_KEYS: [&str; 7] = [
     "fit",
     "extend",
     "symmetrize",
     "normal_to_faces",
     "offset",
     "invert",
+    "optimize",
 ];
 
 /// The keys of [`SYMMETRIC_KEYS`] that concern sampling a source, so not a combination.
 pub(super) const SAMPLING_KEYS: [&str; 2] = ["extend", "symmetrize"];
 
 pub(super) const FIT_KEYS: [&str; 2] = ["n", "tolerance"];
+
+pub(super) const OPTIMIZE_KEYS: [&str; 3] = ["volume_fraction", "max_iterations", "tolerance"];
 
 pub(super) const GENERATOR_KEYS: [&str; 2] = ["generators", "dimension"];
 
