@@ -217,7 +217,11 @@ fn optimization_table(o: &OptimizationSummary) -> String {
         "reached {:.6} (sharp count), ‖c − c₀‖ = {:.4e}, {}\n",
         o.reached,
         o.change,
-        if o.converged { "converged" } else { "NOT converged" }
+        if o.converged {
+            "converged"
+        } else {
+            "NOT converged"
+        }
     ));
     if let Some(w) = o.warning() {
         s.push_str(&format!("warning: {w}\n"));

@@ -14,8 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use latticebuild_geom::symmetric::{
     self, Complex64, Extend, FitOptions, FittedCell, Group, Optimization, SampleOptions, Side,
-    check_surface,
-    fit_samples, minkowski_difference, minkowski_sum, weighted_average,
+    check_surface, fit_samples, minkowski_difference, minkowski_sum, weighted_average,
 };
 
 use super::StageError;

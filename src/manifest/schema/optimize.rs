@@ -29,7 +29,14 @@ impl Checker<'_, '_, '_> {
         let fraction = match fields.get("volume_fraction") {
             None => {
                 let label = "missing `volume_fraction`";
-                self.missing(&fields, &value.span(), "volume_fraction", &within, label, help);
+                self.missing(
+                    &fields,
+                    &value.span(),
+                    "volume_fraction",
+                    &within,
+                    label,
+                    help,
+                );
                 None
             }
             Some((_, v)) => self.optimized_fraction(&format!("{key}.volume_fraction"), v),

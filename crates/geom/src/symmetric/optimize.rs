@@ -4,8 +4,13 @@
 //!
 //! Method and why:
 //! - Problem: `min ‖c − c₀‖` subject to `V(c) = V*` (and, when asked, the face-normal rows
-//!   `C c = 0`). The `φ_f` are orthonormal on the domain, so `‖c − c₀‖` is the L² change of
-//!   the field. Staying in the symmetric basis keeps the group symmetry for free.
+//!   `C c = 0`), with `c − c₀` in the span of the frequencies `|f_a| ≤` [`CHANGE_BAND`]. The
+//!   `φ_f` are orthonormal on the domain, so `‖c − c₀‖` is the L² change of the field.
+//!   Staying in the symmetric basis keeps the group symmetry for free. The band matters: over
+//!   all frequencies the least L² change is a thin, rippled bump at the surface (flat field,
+//!   loose specks of solid); over a low band it is a smooth field, and the level shift (`f =
+//!   0`) is still among the changes allowed. With the face-normal projection the change may
+//!   leave the band along the rows' lines of frequencies.
 //! - Objective: `V(c) = Σ w H_ε(−Φ/|∇Φ|) / Σ w` on the domain grid (`w` the reference
 //!   element's indicator; the whole domain for groups without one), with the smoothed
 //!   Heaviside `H_ε(t) = ½(1 + t/ε + sin(πt/ε)/π)` on `|t| < ε`, applied to the first-order
@@ -46,6 +51,10 @@ use crate::element::Element3;
 /// Samples per axis of the optimisation grid for 3D and 2D groups.
 pub const OPTIMIZE_GRID_3D: usize = 64;
 pub const OPTIMIZE_GRID_2D: usize = 256;
+
+/// The change is made of the frequencies with every `|f_a|` at most this: a smooth field, so
+/// the surface stays as smooth as the fitted one (module docs).
+pub const CHANGE_BAND: u32 = 6;
 
 /// The final smoothing half-width in grid spacings.
 pub const BAND_CELLS: f64 = 1.5;
@@ -229,7 +238,12 @@ impl Problem<'_> {
             .map(|(&(h, g), &w)| -w * heaviside(-h, self.eps).1 / g * m / self.weight_sum)
             .collect();
         let g = fit_samples(&self.start.group, self.grid, &samples)?;
-        let g = FittedCell::new_unchecked(g.group, self.n, g.coefficients);
+        let smooth = g
+            .coefficients
+            .into_iter()
+            .filter(|c| c.f.iter().all(|v| v.unsigned_abs() <= CHANGE_BAND))
+            .collect();
+        let g = FittedCell::new_unchecked(g.group, self.n, smooth);
         if !self.keep_face_normal {
             return Ok(Vector::of(&g));
         }
