@@ -199,3 +199,49 @@ formats = ["ply"]
     assert!(svg.starts_with("<svg") && svg.contains("<path"));
     assert!(p.out("panel.ply").exists());
 }
+
+const OPTIMIZED: &str = r#"
+[cells.w]
+expr = "cos(tau*x) + cos(tau*y) + cos(tau*z) - 0.4*cos(tau*x)*cos(tau*y)*cos(tau*z)"
+symmetry = "Oh"
+fit = { n = 16 }
+optimize = { volume_fraction = 0.3 }
+
+[outputs.cube]
+cell = "w"
+over = "element"
+samples = 41
+"#;
+
+#[test]
+fn optimized_cell_fills_its_fraction_and_lists_its_iterations() {
+    let p = Project::new(OPTIMIZED);
+    let reports = p.build(&[]);
+    let cube = common::by_name(&reports, "cube");
+    // Independent of the optimiser's own count: the contoured mesh's volume.
+    let fraction = common::number(cube, "volume_fraction");
+    assert!((fraction - 0.3).abs() <= 0.01, "{fraction}");
+    assert_eq!(cube["watertight"], true);
+    assert_eq!(cube["components"], 1);
+
+    let out = p.run(&["cell", "lattice.toml", "w", "--json"]);
+    assert!(out.status.success());
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    let o = &json["optimization"];
+    assert_eq!(o["converged"], true, "{o}");
+    let iterations = o["iterations"].as_array().expect("iterations");
+    // Φ(x + ½) = −Φ(x) for this formula (each cosine changes sign), so it starts at ½.
+    let first = iterations[0][0].as_f64().expect("fraction");
+    assert!((first - 0.5).abs() <= 0.01, "{first}");
+    assert!(iterations.len() >= 3, "{o}");
+    let text = p.run(&["cell", "lattice.toml", "w"]);
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(text.contains("optimize: volume fraction 0.3000") && text.contains("converged"));
+
+    // A new target reruns `constrain`, not the fit.
+    p.write("lattice.toml", &OPTIMIZED.replace("0.3 }", "0.35 }"));
+    let again = p.build(&[]);
+    assert_eq!(ran(&again), ["constrain:w", "contour:cube", "write:cube"]);
+    let fraction = common::number(common::by_name(&again, "cube"), "volume_fraction");
+    assert!((fraction - 0.35).abs() <= 0.01, "{fraction}");
+}

@@ -17,7 +17,7 @@ use super::{Failure, ManifestArgs, compile, load_manifest, open_cache};
 use crate::build::Builder;
 use crate::files::OutputDir;
 use crate::progress::NoProgress;
-use crate::stages::symmetric::FittedPayload;
+use crate::stages::symmetric::{FittedPayload, OptimizationSummary};
 
 #[derive(Args, Debug, Clone)]
 pub struct CellArgs {
@@ -96,6 +96,8 @@ pub struct CellReport {
     pub extend: String,
     pub coefficients: Vec<CoefficientRow>,
     pub constraint: ConstraintRow,
+    /// `None` when the cell has no `optimize`.
+    pub optimization: Option<OptimizationSummary>,
     pub values: Vec<ValueRow>,
 }
 
@@ -195,8 +197,36 @@ pub fn report(
         extend: payload.extend.clone(),
         coefficients,
         constraint,
+        optimization: payload.optimization.clone(),
         values,
     })
+}
+
+/// The iterations of `optimize`: volume fraction and change per iterate, then the outcome.
+fn optimization_table(o: &OptimizationSummary) -> String {
+    let mut s = format!(
+        "\noptimize: volume fraction {:.4} of the reference element\n{:>5}  {:>14}  {:>12}  {:>10}\n",
+        o.target, "iter", "fraction (ε)", "‖c − c₀‖", "ε"
+    );
+    for (i, (fraction, change, eps)) in o.iterations.iter().enumerate() {
+        s.push_str(&format!(
+            "{i:>5}  {fraction:>14.6}  {change:>12.4e}  {eps:>10.3e}\n"
+        ));
+    }
+    s.push_str(&format!(
+        "reached {:.6} (sharp count), ‖c − c₀‖ = {:.4e}, {}\n",
+        o.reached,
+        o.change,
+        if o.converged {
+            "converged"
+        } else {
+            "NOT converged"
+        }
+    ));
+    if let Some(w) = o.warning() {
+        s.push_str(&format!("warning: {w}\n"));
+    }
+    s
 }
 
 /// The largest terms first, then the constraint and the values.
@@ -243,6 +273,9 @@ pub fn table(report: &CellReport, largest: usize) -> String {
             r
         )),
         None => s.push_str("\nnormal_to_faces: not asked for\n"),
+    }
+    if let Some(o) = &report.optimization {
+        s.push_str(&optimization_table(o));
     }
     for v in &report.values {
         s.push_str(&format!(

@@ -262,6 +262,18 @@ pub struct Symmetric {
     pub offset: f64,
     /// Swap solid and void: −Φ.
     pub invert: bool,
+    /// The least change of the coefficients reaching a volume fraction (after the other keys).
+    pub optimize: Option<Optimize>,
+}
+
+/// `optimize = { ... }` of a symmetric cell (docs/method.md §Coefficient optimisation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Optimize {
+    /// Target share of the reference element that is solid, in (0, 1).
+    pub volume_fraction: f64,
+    pub max_iterations: usize,
+    /// Allowed error of the volume fraction.
+    pub tolerance: f64,
 }
 
 #[derive(Clone, Debug, PartialEq)]

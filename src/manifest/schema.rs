@@ -31,6 +31,7 @@ mod crystals;
 mod islands;
 mod keys;
 mod meshes;
+mod optimize;
 pub(crate) mod output_files;
 mod program;
 mod scaffolds;

@@ -19,7 +19,7 @@
 //! | `fit`     | group, N (or tolerance, mirror, symmetrize for `auto`)  | samples (or cell payload for `auto`) | coefficient table (JSON) |
 //! | `blend`   | group, weights                                          | member coefficient tables | coefficient table |
 //! | `minkowski` | group, op, N                                          | two coefficient tables | coefficient table |
-//! | `constrain` | group, normal_to_faces, offset, invert                | coefficient table | coefficient table + constraint report |
+//! | `constrain` | group, normal_to_faces, offset, invert, optimize      | coefficient table | coefficient table + constraint report |
 //! | `tile`    | scaffold (extension, or grid), group, by, solid, offset, thickness, graded thickness/offset, sizing, resolution, skin | cell table(s) (+ scaffold file bytes) (+ density table) | mesh + its check + the tiling's counts and scaffold volume |
 //! | `sdf`     | canonical program (paths as input numbers), bounds, samples or voxel | the `file` words' bytes | mesh + its check + the box |
 //! | `islands` | keep, min_island_volume                                 | contour, sdf or tile payload | the kept mesh + its check + what was removed ([`islands`]) |

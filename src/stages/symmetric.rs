@@ -13,8 +13,8 @@
 use serde::{Deserialize, Serialize};
 
 use latticebuild_geom::symmetric::{
-    self, Complex64, Extend, FitOptions, FittedCell, Group, SampleOptions, Side, check_surface,
-    fit_samples, minkowski_difference, minkowski_sum, weighted_average,
+    self, Complex64, Extend, FitOptions, FittedCell, Group, Optimization, SampleOptions, Side,
+    check_surface, fit_samples, minkowski_difference, minkowski_sum, weighted_average,
 };
 
 use super::StageError;
@@ -75,6 +75,34 @@ pub struct ConstraintSummary {
     pub max_face_residual: f64,
 }
 
+/// What `optimize` did (docs/method.md §Coefficient optimisation), for `latticebuild cell`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct OptimizationSummary {
+    pub target: f64,
+    /// The sharp volume fraction of the reference element reached.
+    pub reached: f64,
+    pub converged: bool,
+    /// `‖c − c₀‖`: the L² change of the field.
+    pub change: f64,
+    /// Per iterate (0: the cell before): the smoothed volume fraction, `‖c − c₀‖` and the
+    /// smoothing half-width (cell units).
+    pub iterations: Vec<(f64, f64, f64)>,
+}
+
+impl OptimizationSummary {
+    /// The warning for a run that did not converge, with what it reached.
+    pub fn warning(&self) -> Option<String> {
+        (!self.converged).then(|| {
+            format!(
+                "optimize did not converge in {} iterations: the volume fraction reached is {:.4},                  not {:.4}; raise `max_iterations` or loosen `tolerance`",
+                self.iterations.len().saturating_sub(1),
+                self.reached,
+                self.target
+            )
+        })
+    }
+}
+
 /// A fitted cell as stored in the cache.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FittedPayload {
@@ -90,6 +118,9 @@ pub struct FittedPayload {
     /// bytes).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub auto: Option<AutoSummary>,
+    /// Absent unless the cell has `optimize`, so other payloads keep their bytes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub optimization: Option<OptimizationSummary>,
 }
 
 /// How `n = "auto"` chose N: the movement of the surface from `n` to `2n` (or from
@@ -135,6 +166,7 @@ impl FittedPayload {
                 .collect(),
             constraint,
             auto: None,
+            optimization: None,
         }
     }
 
@@ -338,8 +370,8 @@ impl CombineStage {
     }
 }
 
-/// `constrain`: the face-normal condition (docs/method.md §Face-normal condition), then offset and
-/// inversion.
+/// `constrain`: the face-normal condition (docs/method.md §Face-normal condition), then offset,
+/// inversion and the coefficient optimisation (docs/method.md §Coefficient optimisation).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ConstrainStage {
     pub spec: Symmetric,
@@ -351,6 +383,17 @@ impl ConstrainStage {
             .param("normal_to_faces", self.spec.normal_to_faces)
             .param("offset", self.spec.offset)
             .param("invert", self.spec.invert)
+            .param(
+                "optimize",
+                Param::List(match self.spec.optimize {
+                    None => Vec::new(),
+                    Some(o) => vec![
+                        Param::F64(o.volume_fraction),
+                        Param::U64(o.max_iterations as u64),
+                        Param::F64(o.tolerance),
+                    ],
+                }),
+            )
     }
 
     pub fn run(&self, input: &[u8]) -> Result<Vec<u8>, StageError> {
@@ -374,6 +417,29 @@ impl ConstrainStage {
         if self.spec.invert {
             cell = cell.negated();
         }
-        Ok(FittedPayload::new(&cell, &self.spec, constraint).to_bytes())
+        let mut optimization = None;
+        if let Some(o) = self.spec.optimize {
+            let (optimized, report) = cell.optimize(&Optimization {
+                volume_fraction: o.volume_fraction,
+                keep_face_normal: self.spec.normal_to_faces,
+                max_iterations: o.max_iterations,
+                tolerance: o.tolerance,
+            })?;
+            cell = optimized;
+            optimization = Some(OptimizationSummary {
+                target: report.target,
+                reached: report.reached,
+                converged: report.converged,
+                change: report.change,
+                iterations: report
+                    .iterates
+                    .iter()
+                    .map(|i| (i.volume_fraction, i.change, i.smoothing))
+                    .collect(),
+            });
+        }
+        let mut payload = FittedPayload::new(&cell, &self.spec, constraint);
+        payload.optimization = optimization;
+        Ok(payload.to_bytes())
     }
 }

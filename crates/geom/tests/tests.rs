@@ -30,6 +30,7 @@ mod sdf_pruning;
 mod sdf_semantics;
 mod symmetric_constrain;
 mod symmetric_math;
+mod symmetric_optimize;
 mod tile_2d;
 mod tile_gradient_jump;
 mod tile_scaffolds;

@@ -15,7 +15,7 @@ pub(super) const BUILD_KEYS: [&str; 3] = ["out_dir", "units", "report"];
 
 // `[cells.NAME]`.
 
-pub(super) const CELL_KEYS: [&str; 26] = [
+pub(super) const CELL_KEYS: [&str; 27] = [
     "tpms",
     "expr",
     "blend",
@@ -42,6 +42,7 @@ pub(super) const CELL_KEYS: [&str; 26] = [
     "normal_to_faces",
     "offset",
     "invert",
+    "optimize",
 ];
 
 /// The keys that give a cell its shape; a cell has exactly one.
@@ -58,19 +59,22 @@ pub(super) const SOURCE_KEYS: [&str; 9] = [
 ];
 
 /// The keys of a fitted cell other than `symmetry`, in the order they are documented.
-pub(super) const SYMMETRIC_KEYS: [&str; 6] = [
+pub(super) const SYMMETRIC_KEYS: [&str; 7] = [
     "fit",
     "extend",
     "symmetrize",
     "normal_to_faces",
     "offset",
     "invert",
+    "optimize",
 ];
 
 /// The keys of [`SYMMETRIC_KEYS`] that concern sampling a source, so not a combination.
 pub(super) const SAMPLING_KEYS: [&str; 2] = ["extend", "symmetrize"];
 
 pub(super) const FIT_KEYS: [&str; 3] = ["n", "tolerance", "max_n"];
+
+pub(super) const OPTIMIZE_KEYS: [&str; 3] = ["volume_fraction", "max_iterations", "tolerance"];
 
 pub(super) const GENERATOR_KEYS: [&str; 2] = ["generators", "dimension"];
 

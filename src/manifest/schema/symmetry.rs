@@ -27,7 +27,7 @@ use toml::de::{DeTable, DeValue};
 
 use super::super::expression;
 use super::super::model::{
-    Cell, CellSource, FitResolution, GroupSpec, MinkowskiOp, Name, Symmetric,
+    Cell, CellSource, FitResolution, GroupSpec, MinkowskiOp, Name, Optimize, Symmetric,
 };
 use super::keys::{
     BLEND_KEYS, CELL_KEYS, FIT_KEYS, GENERATOR_KEYS, MINKOWSKI_KEYS, SAMPLING_KEYS, SOURCE_KEYS,
@@ -109,6 +109,7 @@ pub(super) struct Draft {
     normal_to_faces: bool,
     offset: f64,
     invert: bool,
+    optimize: Option<Optimize>,
 }
 
 /// Where a cell stands in the walk over references.
@@ -207,6 +208,10 @@ impl Checker<'_, '_, '_> {
             None => Some(0.0),
             Some(v) => self.finite_number(&path("offset"), v),
         };
+        let optimize = match value_of("optimize") {
+            None => Some(None),
+            Some(v) => self.optimize(name, v).map(Some),
+        };
         let is_mesh = matches!(source, Some((CellSource::Mesh(_), _))) || given.contains(&"mesh");
         let mesh_options = self.mesh_options(name, &fields, is_mesh);
         let is_crystal =
@@ -268,6 +273,7 @@ impl Checker<'_, '_, '_> {
             normal_to_faces: normal_to_faces?,
             offset: offset?,
             invert: invert?,
+            optimize: optimize?,
         })
     }
 
@@ -1257,6 +1263,7 @@ impl Checker<'_, '_, '_> {
                     normal_to_faces: draft.normal_to_faces,
                     offset: draft.offset,
                     invert: draft.invert,
+                    optimize: draft.optimize,
                 })
             }
             // A combination always has a group; without one it failed (and was reported).

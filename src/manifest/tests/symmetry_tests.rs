@@ -95,6 +95,11 @@ pub(super) const SYM_ERR_CASES: &[ErrCase] = &[
         sets: &[],
     },
     ErrCase {
+        name: "optimize: a fraction out of reach, a misspelled key, too many iterations, a missing fraction and a loose tolerance",
+        manifest: "[cells.a]\ntpms = \"p\"\nsymmetry = \"Oh\"\noptimize = { volume_fraction = 1.2, max_iteration = 5 }\n\n[cells.b]\ntpms = \"p\"\nsymmetry = \"Oh\"\noptimize = { max_iterations = 0, tolerance = 0.5 }\n\n[cells.c]\ntpms = \"p\"\noptimize = { volume_fraction = 0.3 }\n\n[cells.d]\ntpms = \"p\"\nsymmetry = \"Oh\"\noptimize = 0.3\n",
+        sets: &[],
+    },
+    ErrCase {
         name: "keys that do not apply to a blend",
         manifest: "[cells.a]\ntpms = \"p\"\nsymmetry = \"Oh\"\n\n[cells.m]\nblend = { cells = [\"a\"], weights = [1] }\nsymmetry = \"Oh\"\nextend = \"none\"\n",
         sets: &[],
@@ -117,6 +122,7 @@ fn symmetric(group: GroupSpec, n: FitResolution) -> Symmetric {
         normal_to_faces: false,
         offset: 0.0,
         invert: false,
+        optimize: None,
     }
 }
 
@@ -173,6 +179,7 @@ symmetrize = true
 normal_to_faces = true
 offset = -0.1
 invert = true
+optimize = { volume_fraction = 0.25, max_iterations = 12 }
 
 [cells.auto]
 tpms = \"p\"
@@ -198,6 +205,11 @@ fit = { n = 8192 }
             normal_to_faces: true,
             offset: -0.1,
             invert: true,
+            optimize: Some(Optimize {
+                volume_fraction: 0.25,
+                max_iterations: 12,
+                tolerance: 1e-4,
+            }),
         })
     );
     let n = |name: &str| manifest.cells[name].symmetric.as_ref().map(|s| s.n);

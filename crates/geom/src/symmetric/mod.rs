@@ -18,6 +18,8 @@
 //! - [`constrain`] — the face-normal constraint `∇Φ·n = 0` on the reference element's faces
 //!   (docs/method.md §Face-normal condition): a least-change projection of the coefficients
 //!   (`row_space.rs`: LSQR on the sparse constraint rows).
+//! - [`optimize`] — the least change of the coefficients that reaches a target volume
+//!   fraction, keeping the face-normal condition.
 //! - [`auto`] — automatic `N`: double until the zero set moves less than a tolerance,
 //!   sampling only the points each doubling adds.
 //! - `fft` (private) — realfft along x (contiguous), rustfft along y and z, rayon across
@@ -44,6 +46,7 @@ mod fft;
 pub mod fit;
 pub mod frequency;
 pub mod group;
+pub mod optimize;
 mod row_space;
 mod sampler;
 
@@ -59,4 +62,5 @@ pub use group::{
     Domain, Frame, Group, GroupError, IDENTITY, MAX_GROUP_ORDER, Matrix, ReferenceElement,
     TETRAHEDRON_FACE_NORMALS,
 };
+pub use optimize::{Iterate, Optimization, OptimizationReport};
 pub use rustfft::num_complex::Complex64;
