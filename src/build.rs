@@ -227,7 +227,7 @@ impl<'a> Builder<'a> {
                 .collect();
             let mut warnings = Vec::new();
             for &id in &chain {
-                warnings.extend(self.fit_warning(id)?);
+                warnings.extend(self.node_warning(id)?);
             }
             results.push(OutputResult {
                 name: name.clone(),
@@ -239,19 +239,25 @@ impl<'a> Builder<'a> {
         Ok(results)
     }
 
-    /// The warning of an automatic-N fit node that stopped short of its tolerance (its small
-    /// payload is loaded for it); `None` for every other node.
-    fn fit_warning(&mut self, id: NodeId) -> Result<Option<String>, BuildError> {
-        match &self.graph.nodes[id].stage {
-            Stage::Fit(fit) if !fit.reads_samples() => {}
+    /// The warning a node's payload carries: an automatic-N fit that stopped short of its
+    /// tolerance, or a crystal cell through whose atoms several surfaces fit (the small payload
+    /// is loaded for it); `None` for every other node.
+    fn node_warning(&mut self, id: NodeId) -> Result<Option<String>, BuildError> {
+        let crystal = match &self.graph.nodes[id].stage {
+            Stage::Fit(fit) if !fit.reads_samples() => false,
+            Stage::Crystal(_) => true,
             _ => return Ok(None),
-        }
+        };
         let mut ignore = |_: Key, _: Arc<MeshArtifact>, _: ContentHash| {};
         self.load(id, &mut ignore)?;
         let Some(Value::Bytes(bytes)) = self.resolved.get(&id).and_then(|r| r.value.clone()) else {
             return Ok(None);
         };
         let node = &self.graph.nodes[id].name;
+        if crystal {
+            let cell = node.strip_prefix("cell:").unwrap_or(node);
+            return Ok(crate::stages::crystal::multiplicity_warning(cell, &bytes));
+        }
         let cell = node.strip_prefix("fit:").unwrap_or(node).to_string();
         Ok(FittedPayload::from_bytes(&bytes)
             .ok()

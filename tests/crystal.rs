@@ -447,3 +447,54 @@ fn rock_salt_gives_one_surface_however_its_atoms_are_listed() {
     let out = project.run(&["crystal", &shuffled]);
     assert!(String::from_utf8_lossy(&out.stdout).contains("not unique"));
 }
+
+#[test]
+fn a_build_warns_when_several_surfaces_pass_through_the_atoms() {
+    // NaCl's 8 ions lie on 6 independent surfaces of the basis (the `crystal` command's JSON
+    // above says so); FAU's Si atoms on one. The report says which, built fresh and cached.
+    let project = Project::new(
+        r#"
+[cells.salt]
+crystal = "NaCl.cif"
+
+[cells.fau]
+crystal = "FAU.cif"
+species = "Si"
+
+[outputs.salt]
+cell = "salt"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+samples = 25
+
+[outputs.fau]
+cell = "fau"
+domain = { min = [0, 0, 0], max = [1, 1, 1] }
+samples = 25
+"#,
+    );
+    std::fs::copy(NACL, project.path().join("NaCl.cif")).expect("copy");
+    std::fs::copy(FAU, project.path().join("FAU.cif")).expect("copy");
+    let multiplicity = crystal_json(&project, &[NACL])["multiplicity"]
+        .as_u64()
+        .expect("multiplicity");
+    assert_eq!(multiplicity, 6);
+    for pass in ["fresh", "cached"] {
+        let reports = project.build(&[]);
+        let warnings = |name: &str| {
+            reports
+                .as_array()
+                .expect("reports")
+                .iter()
+                .find(|r| r["name"] == name)
+                .expect("report")["warnings"]
+                .to_string()
+        };
+        let salt = warnings("salt");
+        assert!(
+            salt.contains("cell `salt`: not unique: 6 independent surfaces"),
+            "{pass}: {salt}"
+        );
+        let fau = warnings("fau");
+        assert!(!fau.contains("not unique"), "{pass}: {fau}");
+    }
+}

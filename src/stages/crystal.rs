@@ -18,7 +18,7 @@ use super::StageError;
 use crate::cache::KeyBuilder;
 use crate::manifest::{CrystalCell, PsTransform};
 
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 
 const PS_MAGIC: &[u8; 8] = b"LBPSCEL1";
 
@@ -72,11 +72,49 @@ impl CrystalStage {
                 self.cell.file.given, r.metrics.max_error, self.cell.max_scale, options.tolerance
             )));
         }
-        match &self.cell.transform {
-            Some(t) => Ok(encode(&transform(&r.model, t)?)),
-            None => Ok(encode(&r.model)),
+        let model = match &self.cell.transform {
+            Some(t) => transform(&r.model, t)?,
+            None => r.model.clone(),
+        };
+        let mut payload = encode(&model);
+        // Several surfaces fit: the count rides after the terms so the build report can say so
+        // on every build, cached or not (`multiplicity` reads it; unique payloads keep their
+        // bytes).
+        if r.metrics.multiplicity > 1 {
+            payload.extend_from_slice(&(r.metrics.multiplicity as u64).to_le_bytes());
         }
+        Ok(payload)
     }
+}
+
+/// How many independent surfaces pass through the atoms equally well (1 for a unique
+/// reconstruction and for `ps` cells), as the crystal stage recorded it.
+pub fn multiplicity(payload: &[u8]) -> usize {
+    let Some(rest) = payload.strip_prefix(PS_MAGIC) else {
+        return 1;
+    };
+    let Some(count) = rest.get(..8).and_then(|b| b.try_into().ok()) else {
+        return 1;
+    };
+    let trailer = u64::from_le_bytes(count)
+        .checked_mul(48)
+        .and_then(|n| usize::try_from(n).ok())
+        .and_then(|n| rest.get(8 + n..))
+        .and_then(|t| <[u8; 8]>::try_from(t).ok());
+    trailer.map_or(1, |b| (u64::from_le_bytes(b) as usize).max(1))
+}
+
+/// The report's warning for a crystal cell through whose atoms several surfaces fit.
+pub fn multiplicity_warning(cell: &str, payload: &[u8]) -> Option<String> {
+    let m = multiplicity(payload);
+    (m > 1).then(|| {
+        format!(
+            "cell `{cell}`: not unique: {m} independent surfaces of the basis pass through the \
+             atoms equally well (the smallest singular value repeats {m} times); the canonical \
+             one is built, the same however the file lists the atoms \
+             (`latticebuild crystal FILE` shows it)"
+        )
+    })
 }
 
 /// A PS model moved by a cell's `transform`, exactly on its terms (Wang's lemmas).
@@ -156,9 +194,12 @@ pub fn decode(payload: &[u8]) -> Result<PsModel, StageError> {
         .map(u64::from_le_bytes)
         .ok_or_else(bad)?;
     let body = &rest[8..];
-    if body.len() as u64 != count.saturating_mul(48) {
+    let terms_len = count.saturating_mul(48);
+    // An 8-byte multiplicity may follow the terms (see `CrystalStage::run`).
+    if body.len() as u64 != terms_len && body.len() as u64 != terms_len.saturating_add(8) {
         return Err(bad());
     }
+    let body = &body[..terms_len as usize];
     let value = |c: &[u8]| f64::from_le_bytes(c.try_into().unwrap_or([0; 8]));
     let terms = body
         .chunks_exact(48)
@@ -182,6 +223,28 @@ pub fn ps_cell_field(payload: &[u8]) -> Result<Box<dyn ScalarField>, StageError>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_repeated_singular_value_rides_after_the_terms() {
+        let model = PsModel::new(vec![PsTerm {
+            moment: 0.5,
+            scale: 1.0,
+            vector: [1.0, 0.0, 0.0, 0.25],
+        }]);
+        let plain = encode(&model);
+        assert_eq!(multiplicity(&plain), 1);
+        assert_eq!(multiplicity_warning("c", &plain), None);
+        let mut tagged = plain.clone();
+        tagged.extend_from_slice(&6u64.to_le_bytes());
+        assert_eq!(multiplicity(&tagged), 6);
+        assert_eq!(decode(&tagged).expect("decodes"), model);
+        let warning = multiplicity_warning("c", &tagged).expect("warns");
+        assert!(warning.starts_with("cell `c`: not unique: 6 "), "{warning}");
+        // Anything else after the terms is not a payload.
+        tagged.push(0);
+        assert!(decode(&tagged).is_err());
+        assert_eq!(multiplicity(&tagged), 1);
+    }
 
     #[test]
     fn payload_reloads_bit_for_bit() {

@@ -49,7 +49,7 @@
 //! - NaN samples count as outside.
 
 use crate::contour::table::{CORNER_SLOT, EDGE_CORNERS, HI_SLOT, tables};
-use crate::contour::{apart_in_f32, band_crossing, spans_band};
+use crate::contour::{apart_in_f32, band_crossing, crossing_fraction, spans_band};
 use crate::field::Band;
 use crate::mesh::{Mesh, inseparable_edge, round_inside};
 use crate::simplex_contour::contour_triangle;
@@ -175,10 +175,6 @@ pub enum PlanarError {
         at_bits: [u64; 2],
     },
 }
-
-/// Crossing points are kept this fraction of an edge away from its ends, so no two vertices
-/// coincide even where a sample is exactly zero (same margin as the 3D contourer).
-const EDGE_MARGIN: f64 = 1.0 / 256.0;
 
 /// Contours `{Φ ≤ 0} ∩ element` (see the module docs). `samples` is the number of samples per
 /// axis of the square, or along each side of the triangle; at least 2.
@@ -351,16 +347,6 @@ impl Lattice {
     }
 }
 
-/// Where along the edge from value `v0` to `v1` the zero lies, kept off the ends.
-fn crossing(v0: f64, v1: f64) -> f64 {
-    let t = v0 / (v0 - v1);
-    if t.is_finite() {
-        t.clamp(EDGE_MARGIN, 1.0 - EDGE_MARGIN)
-    } else {
-        0.5
-    }
-}
-
 /// Inside test shared by every use: NaN compares false, so it is outside.
 #[inline]
 fn inside(v: f64) -> bool {
@@ -450,7 +436,7 @@ impl<'a> Vertices<'a> {
         let (v0, v1) = (self.values[i + nx * j], self.values[next]);
         let band = self.band;
         let at = |upper: bool| match band {
-            None => crossing(v0, v1),
+            None => crossing_fraction(v0, v1),
             Some(band) => band_crossing(v0, v1, band, upper),
         };
         let t = at(upper);

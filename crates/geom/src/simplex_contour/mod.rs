@@ -31,12 +31,10 @@
 //! counter-clockwise seen from outside (from +z in 2D). The tetrahedron is sampled one layer of
 //! nodes at a time, so memory grows with the surface and `M²`, not `M³`.
 
+use crate::contour::crossing_fraction;
 use crate::field::ScalarField;
 use crate::mesh::Mesh;
 use std::collections::HashMap;
-
-/// Crossings stay this fraction of an edge away from its ends (as in the cube contourer).
-const EDGE_MARGIN: f64 = 1.0 / 256.0;
 
 /// `√3`.
 const SQRT3: f64 = 1.732_050_807_568_877_2;
@@ -45,16 +43,6 @@ const SQRT3: f64 = 1.732_050_807_568_877_2;
 pub(crate) struct Contoured<const D: usize> {
     pub(crate) mesh: Mesh,
     pub(crate) positions: Vec<[f64; D]>,
-}
-
-/// Where along the edge from value `v0` to `v1` the zero lies, kept off the ends.
-fn crossing(v0: f64, v1: f64) -> f64 {
-    let t = v0 / (v0 - v1);
-    if t.is_finite() {
-        t.clamp(EDGE_MARGIN, 1.0 - EDGE_MARGIN)
-    } else {
-        0.5
-    }
 }
 
 /// NaN compares false: outside.
@@ -114,7 +102,7 @@ impl<const D: usize> Vertices<D> {
         if let Some(&id) = self.edges.get(&(a.key, b.key)) {
             return id;
         }
-        let t = crossing(a.value, b.value);
+        let t = crossing_fraction(a.value, b.value);
         let id = self.add(std::array::from_fn(|d| a.at[d] + t * (b.at[d] - a.at[d])));
         self.edges.insert((a.key, b.key), id);
         id
