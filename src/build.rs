@@ -240,12 +240,19 @@ impl<'a> Builder<'a> {
     }
 
     /// The warning a node's payload carries: an automatic-N fit that stopped short of its
-    /// tolerance, or a crystal cell through whose atoms several surfaces fit (the small payload
-    /// is loaded for it); `None` for every other node.
+    /// tolerance, an `optimize` that did not reach its target, or a crystal cell through whose
+    /// atoms several surfaces fit (the small payload is loaded for it); `None` for every other
+    /// node.
     fn node_warning(&mut self, id: NodeId) -> Result<Option<String>, BuildError> {
-        let crystal = match &self.graph.nodes[id].stage {
-            Stage::Fit(fit) if !fit.reads_samples() => false,
-            Stage::Crystal(_) => true,
+        enum Carrier {
+            AutoFit,
+            Optimize,
+            Crystal,
+        }
+        let (carrier, prefix) = match &self.graph.nodes[id].stage {
+            Stage::Fit(fit) if !fit.reads_samples() => (Carrier::AutoFit, "fit:"),
+            Stage::Constrain(_) => (Carrier::Optimize, "constrain:"),
+            Stage::Crystal(_) => (Carrier::Crystal, "cell:"),
             _ => return Ok(None),
         };
         let mut ignore = |_: Key, _: Arc<MeshArtifact>, _: ContentHash| {};
@@ -254,16 +261,18 @@ impl<'a> Builder<'a> {
             return Ok(None);
         };
         let node = &self.graph.nodes[id].name;
-        if crystal {
-            let cell = node.strip_prefix("cell:").unwrap_or(node);
-            return Ok(crate::stages::crystal::multiplicity_warning(cell, &bytes));
-        }
-        let cell = node.strip_prefix("fit:").unwrap_or(node).to_string();
-        Ok(FittedPayload::from_bytes(&bytes)
-            .ok()
-            .and_then(|p| p.auto)
-            .and_then(|a| a.warning())
-            .map(|w| format!("cell `{cell}`: {w}")))
+        let cell = node.strip_prefix(prefix).unwrap_or(node);
+        let fitted = || FittedPayload::from_bytes(&bytes).ok();
+        let warning = match carrier {
+            Carrier::Crystal => {
+                return Ok(crate::stages::crystal::multiplicity_warning(cell, &bytes));
+            }
+            Carrier::AutoFit => fitted().and_then(|p| p.auto).and_then(|a| a.warning()),
+            Carrier::Optimize => fitted()
+                .and_then(|p| p.optimization)
+                .and_then(|o| o.warning()),
+        };
+        Ok(warning.map(|w| format!("cell `{cell}`: {w}")))
     }
 
     /// Builds node `id` and what it needs, and returns its payload (for `latticebuild cell`).

@@ -214,6 +214,26 @@ samples = 41
 "#;
 
 #[test]
+fn an_optimize_that_stops_short_warns_in_the_build_report() {
+    // One iteration cannot take the cell from ½ to 0.3 (the geometry crate's test of the same
+    // run); the report says what was reached, on the fresh build and on the cached one.
+    let p = Project::new(&OPTIMIZED.replace("0.3 }", "0.3, max_iterations = 1 }"));
+    for pass in ["fresh", "cached"] {
+        let reports = p.build(&[]);
+        let warnings = common::by_name(&reports, "cube")["warnings"].to_string();
+        assert!(
+            warnings.contains("cell `w`: optimize did not converge in 1 iterations")
+                && warnings.contains("not 0.3000"),
+            "{pass}: {warnings}"
+        );
+    }
+    let converged = Project::new(OPTIMIZED);
+    let reports = converged.build(&[]);
+    let warnings = common::by_name(&reports, "cube")["warnings"].to_string();
+    assert!(!warnings.contains("optimize"), "{warnings}");
+}
+
+#[test]
 fn optimized_cell_fills_its_fraction_and_lists_its_iterations() {
     let p = Project::new(OPTIMIZED);
     let reports = p.build(&[]);

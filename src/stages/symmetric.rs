@@ -94,7 +94,8 @@ impl OptimizationSummary {
     pub fn warning(&self) -> Option<String> {
         (!self.converged).then(|| {
             format!(
-                "optimize did not converge in {} iterations: the volume fraction reached is {:.4},                  not {:.4}; raise `max_iterations` or loosen `tolerance`",
+                "optimize did not converge in {} iterations: the volume fraction reached is {:.4}, \
+                 not {:.4}; raise `max_iterations` or loosen `tolerance`",
                 self.iterations.len().saturating_sub(1),
                 self.reached,
                 self.target
