@@ -253,6 +253,38 @@ samples = 33
             "{warnings:?}"
         );
     }
+    // `latticebuild cell` says how N was chosen, also through a `constrain` stage (an offset).
+    for set in [None, Some("cells.ball.offset=0.01")] {
+        let mut args = vec!["cell", "lattice.toml", "ball"];
+        args.extend(set.iter().flat_map(|s| ["--set", s]));
+        let out = p.run(&[args.as_slice(), &["--json"]].concat());
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+        assert_eq!(json["n"], 64, "{json}");
+        assert_eq!(json["auto"]["n"], 64, "{json}");
+        assert_eq!(json["auto"]["converged"], false, "{json}");
+        let text = String::from_utf8_lossy(&p.run(&args).stdout).to_string();
+        assert!(
+            text.contains("N = 64 reached max_n: automatic N stopped at max_n = 64"),
+            "{text}"
+        );
+    }
+    let loose = [
+        "cell",
+        "lattice.toml",
+        "ball",
+        "--set",
+        "cells.ball.fit.tolerance=1",
+    ];
+    let text = String::from_utf8_lossy(&p.run(&loose).stdout).to_string();
+    assert!(
+        text.contains("N = 32 chosen automatically: doubling it to 64 moves the surface"),
+        "{text}"
+    );
     let r = &p.build(&["--set", "cells.ball.fit.tolerance=1"])[0];
     let warned = r["warnings"].as_array().into_iter().flatten();
     assert!(

@@ -17,7 +17,7 @@ use super::{Failure, ManifestArgs, compile, load_manifest, open_cache};
 use crate::build::Builder;
 use crate::files::OutputDir;
 use crate::progress::NoProgress;
-use crate::stages::symmetric::{FittedPayload, OptimizationSummary};
+use crate::stages::symmetric::{AutoSummary, FittedPayload, OptimizationSummary};
 
 #[derive(Args, Debug, Clone)]
 pub struct CellArgs {
@@ -96,6 +96,8 @@ pub struct CellReport {
     pub extend: String,
     pub coefficients: Vec<CoefficientRow>,
     pub constraint: ConstraintRow,
+    /// How `n = "auto"` chose N; `None` for a fixed N.
+    pub auto: Option<AutoSummary>,
     /// `None` when the cell has no `optimize`.
     pub optimization: Option<OptimizationSummary>,
     pub values: Vec<ValueRow>,
@@ -197,9 +199,31 @@ pub fn report(
         extend: payload.extend.clone(),
         coefficients,
         constraint,
+        auto: payload.auto.clone(),
         optimization: payload.optimization.clone(),
         values,
     })
+}
+
+/// How `n = "auto"` chose N, in the words of its warning when it stopped at `max_n`.
+fn auto_line(a: &AutoSummary) -> String {
+    if a.converged {
+        format!(
+            "N = {} chosen automatically: doubling it to {} moves the surface {:.2e} cell units, \
+             within the tolerance {:.1e} (max_n {})",
+            a.n,
+            2 * a.n,
+            a.movement,
+            a.tolerance,
+            a.max_n
+        )
+    } else {
+        format!(
+            "N = {} reached max_n: {}",
+            a.n,
+            a.warning().unwrap_or_default()
+        )
+    }
 }
 
 /// The iterations of `optimize`: volume fraction and change per iterate, then the outcome.
@@ -245,6 +269,12 @@ pub fn table(report: &CellReport, largest: usize) -> String {
         "im",
         "K_f"
     );
+    if let Some(a) = &report.auto {
+        s.insert_str(
+            s.find('\n').unwrap_or(s.len()),
+            &format!("\n{}", auto_line(a)),
+        );
+    }
     for row in rows.iter().take(largest) {
         let f: Vec<String> = row.f.iter().map(i32::to_string).collect();
         s.push_str(&format!(

@@ -21,7 +21,7 @@ use super::StageError;
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::{FitResolution, GroupSpec, MinkowskiOp, Symmetric};
 
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 
 const SAMPLES_MAGIC: &[u8; 8] = b"LBSAMP01";
 
@@ -399,7 +399,8 @@ impl ConstrainStage {
 
     pub fn run(&self, input: &[u8]) -> Result<Vec<u8>, StageError> {
         let group = group_of(&self.spec.group)?;
-        let mut cell = FittedPayload::from_bytes(input)?.cell(&group)?;
+        let fitted = FittedPayload::from_bytes(input)?;
+        let mut cell = fitted.cell(&group)?;
         let constraint = if self.spec.normal_to_faces {
             let (constrained, report) = cell.constrain_normal_to_faces()?;
             cell = constrained;
@@ -441,6 +442,8 @@ impl ConstrainStage {
         }
         let mut payload = FittedPayload::new(&cell, &self.spec, constraint);
         payload.optimization = optimization;
+        // How N was chosen stays with the cell, for `latticebuild cell`.
+        payload.auto = fitted.auto;
         Ok(payload.to_bytes())
     }
 }
