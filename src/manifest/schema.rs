@@ -669,18 +669,7 @@ impl Checker<'_, '_, '_> {
                 None
             }
             (Some((_, samples)), Some((_, voxel))) => {
-                // The one written later is the one that conflicts with the other.
-                let (later, earlier) = if voxel.span().start > samples.span().start {
-                    (voxel, "samples")
-                } else {
-                    (samples, "voxel")
-                };
-                self.error(
-                    later.span(),
-                    &format!("both `samples` and `voxel` given {within}"),
-                    &format!("`{earlier}` is already given"),
-                    Some("give either `samples` (grid points per axis) or `voxel` (grid spacing)"),
-                );
+                self.samples_and_voxel(samples, voxel, within, "grid points per axis");
                 None
             }
             (Some((_, v)), None) if planar && is_pair(v) => {
@@ -1091,6 +1080,30 @@ impl Checker<'_, '_, '_> {
             diag = diag.with_help(help);
         }
         self.report.at(&span, diag);
+    }
+
+    /// Reports `samples` and `voxel` given together, at the one written later (the one that
+    /// conflicts with the other); `counts` says what `samples` counts there.
+    fn samples_and_voxel(
+        &mut self,
+        samples: &Spanned<DeValue<'_>>,
+        voxel: &Spanned<DeValue<'_>>,
+        within: &str,
+        counts: &str,
+    ) {
+        let (later, earlier) = if voxel.span().start > samples.span().start {
+            (voxel, "samples")
+        } else {
+            (samples, "voxel")
+        };
+        self.error(
+            later.span(),
+            &format!("both `samples` and `voxel` given {within}"),
+            &format!("`{earlier}` is already given"),
+            Some(&format!(
+                "give either `samples` ({counts}) or `voxel` (grid spacing)"
+            )),
+        );
     }
 
     /// Reports a missing required key, unless a misspelling of it was already reported.

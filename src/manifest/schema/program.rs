@@ -335,17 +335,7 @@ impl Checker<'_, '_, '_> {
         match (fields.get("samples"), fields.get("voxel")) {
             (None, None) => Some(ProgramResolution::Counts(lang::DEFAULT_SAMPLES)),
             (Some((_, samples)), Some((_, voxel))) => {
-                let (later, earlier) = if voxel.span().start > samples.span().start {
-                    (voxel, "samples")
-                } else {
-                    (samples, "voxel")
-                };
-                self.error(
-                    later.span(),
-                    &format!("both `samples` and `voxel` given {within}"),
-                    &format!("`{earlier}` is already given"),
-                    Some("give either `samples` (how many grid points) or `voxel` (grid spacing)"),
-                );
+                self.samples_and_voxel(samples, voxel, within, "how many grid points");
                 None
             }
             (Some((_, v)), None) => {

@@ -121,18 +121,8 @@ mod tests {
             [0.0, 0.5, 0.0],
             [0.0, 0.0, 0.5],
         ];
-        let dirs: [[f64; 3]; 10] = [
-            [1.0, 1.0, 0.0],
-            [1.0, 0.0, 1.0],
-            [0.0, 1.0, 1.0],
-            [1.0, -1.0, 0.0],
-            [-1.0, 0.0, 1.0],
-            [0.0, 1.0, -1.0],
-            [1.0, 1.0, 1.0],
-            [1.0, -1.0, 1.0],
-            [-1.0, 1.0, 1.0],
-            [1.0, 1.0, -1.0],
-        ];
+        // The 6 face and 4 body diagonals: the paper's 13 directions after the 3 axes.
+        let dirs = &crate::periodic::model::DIRECTIONS_13[3..];
         DMatrix::from_fn(order.len(), dirs.len(), |n, t| {
             let p = ions[order[n]];
             let d = dirs[t];
