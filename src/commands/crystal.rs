@@ -229,6 +229,13 @@ fn to_json(
                 "method": o.method.describe(),
                 "scales": o.scales,
                 "freedom": o.freedom,
+                "phase": o.phase.as_ref().map(|p| json!({
+                    "theta": p.theta,
+                    "evaluations": p.evaluations,
+                    "porosity_at_zero": p.porosity_at_zero,
+                    "porosity_at_theta": p.porosity_at_theta,
+                })),
+                "domain": DOMAIN,
             })
         }),
         "transform": transform.map(|t| json!({
@@ -240,6 +247,10 @@ fn to_json(
         "chebyshev": model.chebyshev().as_ref().map(chebyshev_json),
     })
 }
+
+/// The domain of eq. 11–12: fixed, since moving it changes nothing (`geom::periodic::phase`).
+const DOMAIN: &str = "the unit cell [0, 1)³ (a period: moving it changes neither the surface \
+                      nor the porosity)";
 
 fn report(given: &str, args: &CrystalArgs, found: &FoundSurface, model: &PsModel) -> String {
     let r = &found.reconstruction;
@@ -281,6 +292,18 @@ fn report(given: &str, args: &CrystalArgs, found: &FoundSurface, model: &PsModel
             o.before.porosity,
             o.after.porosity
         ));
+        if let Some(p) = &o.phase {
+            let plain =
+                |v: Option<f64>| v.map_or("not converged".to_string(), |v| format!("{v:.4}"));
+            out.push_str(&format!(
+                "phase shift θ = {} in every basis vector (searched over [0, ½) by {} plain \
+                 searches; their porosity {} at θ = 0, {} at the best θ); domain: {DOMAIN}\n",
+                p.theta,
+                p.evaluations,
+                plain(p.porosity_at_zero),
+                plain(p.porosity_at_theta)
+            ));
+        }
     }
     let verdict = if r.converged {
         "passes through every atom"

@@ -18,7 +18,7 @@ use super::StageError;
 use crate::cache::KeyBuilder;
 use crate::manifest::{CrystalCell, PsTransform};
 
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
 
 const PS_MAGIC: &[u8; 8] = b"LBPSCEL1";
 

@@ -19,6 +19,7 @@ mod mesh_sdf_distance;
 mod mesh_sdf_messy;
 mod mesh_sdf_winding;
 mod periodic_crystals;
+mod periodic_phase;
 mod scaffold_element;
 mod scaffold_files;
 mod scaffold_grid;

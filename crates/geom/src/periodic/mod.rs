@@ -16,6 +16,7 @@ pub mod cif;
 pub mod model;
 pub mod nullspace;
 pub mod optimize;
+pub mod phase;
 pub mod reconstruct;
 pub mod xyz;
 

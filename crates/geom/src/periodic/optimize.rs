@@ -24,6 +24,7 @@ use nalgebra::DVector;
 
 use super::model::{PsModel, PsTerm};
 use super::nullspace::smallest_subspace;
+use super::phase::PhaseChoice;
 use super::reconstruct::{Metrics, ReconstructError, design_matrix, fit, normalised};
 
 /// Before and after eq. 12.
@@ -37,6 +38,8 @@ pub struct Optimization {
     pub method: Method,
     /// The dimension of the space of exact fits searched (1 when there was no choice).
     pub freedom: usize,
+    /// The phase shift chosen ([`super::phase`]); `None` only inside that search.
+    pub phase: Option<PhaseChoice>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -77,6 +80,7 @@ pub(super) fn optimize(
             scales: at.0.to_vec(),
             method: Method::Unchanged,
             freedom: before.multiplicity,
+            phase: None,
         },
     );
     let better = |m: &Metrics, than: &Metrics| {

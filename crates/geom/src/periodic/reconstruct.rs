@@ -100,8 +100,22 @@ pub enum ReconstructError {
     Vanishes,
 }
 
-/// Reconstructs a loci surface through `points` (cell coordinates).
+/// Reconstructs a loci surface through `points` (cell coordinates); with `optimize`, eq. 12
+/// over the moments and the phase shift ([`phase`](super::phase)).
 pub fn reconstruct(
+    points: &[[f64; 3]],
+    options: &ReconstructOptions,
+) -> Result<Reconstruction, ReconstructError> {
+    if options.optimize {
+        super::phase::optimize_with_phase(points, options)
+    } else {
+        search(points, options)
+    }
+}
+
+/// The incremental search on `options.directions` as given, then (with `optimize`) eq. 12
+/// over the moments.
+pub(super) fn search(
     points: &[[f64; 3]],
     options: &ReconstructOptions,
 ) -> Result<Reconstruction, ReconstructError> {
