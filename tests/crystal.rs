@@ -334,11 +334,37 @@ fn crystal_transform_flags_print_the_transformed_terms() {
 
 /// The JSON's Chebyshev form, evaluated here as Σ c_k cos(k arccos s) per basis vector,
 /// equals the cosine terms (the optimised Faujasite surface has scales 1 and 2 on the same
-/// vectors, so some polynomials have two degrees).
+/// vectors, so some polynomials have two degrees). The same run's optimisation numbers agree:
+/// the phase kept is 0, the plain search's porosity at 0 is "before", "after" is the surface's
+/// porosity, and the printed terms vanish at every Si atom (evaluated here).
 #[test]
 fn crystal_chebyshev_form_equals_the_cosine_terms() {
     let project = Project::new("");
     let json = crystal_json(&project, &[FAU, "--species", "Si", "--optimize"]);
+    let o = &json["optimization"];
+    let phase = &o["phase"];
+    assert_eq!(phase["theta"].as_f64(), Some(0.0), "{o}");
+    assert!(
+        phase["evaluations"].as_u64().is_some_and(|n| n >= 24),
+        "{o}"
+    );
+    assert_eq!(phase["porosity_at_zero"], o["before"]["porosity"], "{o}");
+    assert_eq!(o["after"]["porosity"], json["porosity"], "{o}");
+    assert_eq!(o["after"]["dimension"], json["dimension"], "{o}");
+    assert!(
+        o["domain"]
+            .as_str()
+            .is_some_and(|d| d.contains("unit cell")),
+        "{o}"
+    );
+    let bytes = std::fs::read(FAU).expect("FAU.cif");
+    let crystal = read_crystal("FAU.cif", &bytes).expect("read");
+    let atoms = positions_of(&crystal.atoms(&ExpandOptions::default()), Some("Si"));
+    let terms = json["terms"].as_array().expect("terms");
+    assert!(terms.iter().all(|t| t["vector"][3].as_f64() == Some(0.0)));
+    for a in &atoms {
+        assert!(psi(terms, *a).abs() <= 1e-9, "{a:?}");
+    }
     let terms = json["terms"].as_array().expect("terms");
     let form = &json["chebyshev"];
     let planes = form["planes"].as_array().expect("planes");

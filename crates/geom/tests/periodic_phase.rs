@@ -12,7 +12,7 @@
 
 use std::f64::consts::TAU;
 
-use latticebuild_geom::periodic::phase::{GRID, PERIOD, shift_terms};
+use latticebuild_geom::periodic::phase::{GRID, PERIOD, shift_terms, shifted};
 use latticebuild_geom::periodic::reconstruct::{ReconstructOptions, reconstruct};
 use latticebuild_geom::periodic::{
     Crystal, ExpandOptions, PsModel, PsTerm, positions_of, read_crystal,
@@ -193,6 +193,24 @@ fn faujasite_keeps_a_zero_phase_and_every_atom_on_the_surface() {
     assert_eq!(phase.porosity_at_zero, Some(plain.metrics.porosity));
     assert!(o.after.porosity >= o.before.porosity);
     assert!(o.after.porosity > 0.37, "{o:?}");
+    // Why θ = 0: no other grid phase's plain search has a higher porosity.
+    for j in 1..GRID {
+        let theta = PERIOD * j as f64 / GRID as f64;
+        let at = ReconstructOptions {
+            directions: shifted(&ReconstructOptions::default().directions, theta),
+            ..ReconstructOptions::default()
+        };
+        let s = reconstruct(&points, &at).expect("shifted");
+        let last = s.steps.last().map(|s| s.scales.clone());
+        println!(
+            "FAU θ = {theta:.4}: converged {} {last:?} {:?}",
+            s.converged, s.metrics
+        );
+        assert!(
+            !s.converged || s.metrics.porosity < plain.metrics.porosity,
+            "θ {theta}"
+        );
+    }
     let max = direct_max(&r.model);
     let worst = points
         .iter()

@@ -12,7 +12,8 @@
 //!   searched by Nelder–Mead from each canonical basis vector of the subspace.
 //!
 //! and the result is the candidate with the highest porosity whose error is below the
-//! tolerance, or the surface unchanged when none beats it.
+//! tolerance, or the surface unchanged when none beats it. The phase shift of eq. 12 and the
+//! domain are [`super::phase`]'s, which runs this at the phase it chooses.
 //!
 //! Invariants:
 //! - Deterministic and independent of the atom order: the search runs in the subspace's
