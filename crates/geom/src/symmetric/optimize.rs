@@ -1,6 +1,12 @@
-//! Coefficient optimisation (docs/method.md §Coefficient optimisation): the cell closest to a
-//! fitted one, in the basis's L² norm, whose solid `{Φ ≤ 0}` fills a target volume fraction
-//! of its reference element.
+//! Coefficient optimisation (docs/method.md §Coefficient optimisation, §Surface area): the
+//! cell closest to a fitted one, in the basis's L² norm, whose solid `{Φ ≤ 0}` fills a target
+//! volume fraction of its reference element and/or whose surface has a target area density.
+//!
+//! Surface area (the volume-only path below is unchanged, to the bit): the constraint value
+//! is the sharp marching area on the optimisation grid ([`super::measure`]), its gradient the
+//! curvature form `−w δ_ε(d) κ/|∇Φ|` fitted like the volume's (`objective.rs`); with both
+//! targets the steps solve the 2×2 system `J Jᵀ λ = r` (restoration) and go to `c₀ + Jᵀμ`
+//! (least change); residuals are scaled (`|V − V*|`, `|A − A*|/A*`).
 //!
 //! Method and why:
 //! - Problem: `min ‖c − c₀‖` subject to `V(c) = V*` (and, when asked, the face-normal rows
