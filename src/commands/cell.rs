@@ -17,7 +17,7 @@ use super::{Failure, ManifestArgs, compile, load_manifest, open_cache};
 use crate::build::Builder;
 use crate::files::OutputDir;
 use crate::progress::NoProgress;
-use crate::stages::symmetric::{AutoSummary, FittedPayload, OptimizationSummary};
+use crate::stages::symmetric::{AutoSummary, FittedPayload, Measures, OptimizationSummary};
 
 #[derive(Args, Debug, Clone)]
 pub struct CellArgs {
@@ -100,6 +100,9 @@ pub struct CellReport {
     pub auto: Option<AutoSummary>,
     /// `None` when the cell has no `optimize`.
     pub optimization: Option<OptimizationSummary>,
+    /// The cell's volume fraction and surface-area density in its reference element
+    /// (docs/method.md §Surface area), measured on the optimisation's sharp grid.
+    pub measures: Measures,
     pub values: Vec<ValueRow>,
 }
 
@@ -192,7 +195,12 @@ pub fn report(
             max_face_residual: None,
         },
     };
+    let measured = latticebuild_geom::symmetric::measure(&cell).map_err(|e| e.to_string())?;
     Ok(CellReport {
+        measures: Measures {
+            volume_fraction: measured.volume_fraction,
+            surface_area: measured.surface_area,
+        },
         name: name.to_string(),
         group: payload.group.clone(),
         n: payload.n,
@@ -226,15 +234,37 @@ fn auto_line(a: &AutoSummary) -> String {
     }
 }
 
-/// The iterations of `optimize`: volume fraction and change per iterate, then the outcome.
+/// The iterations of `optimize`: volume fraction (and area) and change per iterate, the
+/// measures before and after, then the outcome.
 fn optimization_table(o: &OptimizationSummary) -> String {
+    let mut goals = Vec::new();
+    if let Some(t) = o.target {
+        goals.push(format!("volume fraction {t:.4} of the reference element"));
+    }
+    if let Some(a) = &o.surface_area {
+        goals.push(format!("surface area {:.4} per element volume", a.target));
+    }
+    let area_column = o.surface_area.as_ref().map(|a| &a.iterations);
     let mut s = format!(
-        "\noptimize: volume fraction {:.4} of the reference element\n{:>5}  {:>14}  {:>12}  {:>10}\n",
-        o.target, "iter", "fraction (ε)", "‖c − c₀‖", "ε"
+        "\noptimize: {}\n{:>5}  {:>14}{}  {:>12}  {:>10}\n",
+        goals.join(", "),
+        "iter",
+        "fraction (ε)",
+        if area_column.is_some() {
+            format!("  {:>12}", "area (ε)")
+        } else {
+            String::new()
+        },
+        "‖c − c₀‖",
+        "ε"
     );
     for (i, (fraction, change, eps)) in o.iterations.iter().enumerate() {
+        let area = match area_column.and_then(|a| a.get(i)) {
+            Some(a) => format!("  {a:>12.6}"),
+            None => String::new(),
+        };
         s.push_str(&format!(
-            "{i:>5}  {fraction:>14.6}  {change:>12.4e}  {eps:>10.3e}\n"
+            "{i:>5}  {fraction:>14.6}{area}  {change:>12.4e}  {eps:>10.3e}\n"
         ));
     }
     s.push_str(&format!(
@@ -247,6 +277,12 @@ fn optimization_table(o: &OptimizationSummary) -> String {
             "NOT converged"
         }
     ));
+    if let (Some(b), Some(a)) = (&o.before, &o.after) {
+        s.push_str(&format!(
+            "before → after: volume fraction {:.6} → {:.6}, surface area {:.6} → {:.6}\n",
+            b.volume_fraction, a.volume_fraction, b.surface_area, a.surface_area
+        ));
+    }
     if let Some(w) = o.warning() {
         s.push_str(&format!("warning: {w}\n"));
     }
@@ -304,6 +340,10 @@ pub fn table(report: &CellReport, largest: usize) -> String {
         )),
         None => s.push_str("\nnormal_to_faces: not asked for\n"),
     }
+    s.push_str(&format!(
+        "measured: volume fraction {:.6}, surface area {:.6} per element volume\n",
+        report.measures.volume_fraction, report.measures.surface_area
+    ));
     if let Some(o) = &report.optimization {
         s.push_str(&optimization_table(o));
     }

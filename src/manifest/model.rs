@@ -262,7 +262,8 @@ pub struct Symmetric {
     pub offset: f64,
     /// Swap solid and void: −Φ.
     pub invert: bool,
-    /// The least change of the coefficients reaching a volume fraction (after the other keys).
+    /// The least change of the coefficients reaching a volume fraction and/or surface area
+    /// (after the other keys).
     pub optimize: Option<Optimize>,
 }
 
@@ -270,7 +271,10 @@ pub struct Symmetric {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Optimize {
     /// Target share of the reference element that is solid, in (0, 1).
-    pub volume_fraction: f64,
+    pub volume_fraction: Option<f64>,
+    /// Target surface-area density: area of the level set inside the reference element per
+    /// element volume (perimeter per area in 2D), positive. At least one target is given.
+    pub surface_area: Option<f64>,
     pub max_iterations: usize,
     /// Allowed error of the volume fraction.
     pub tolerance: f64,

@@ -13,15 +13,15 @@
 use serde::{Deserialize, Serialize};
 
 use latticebuild_geom::symmetric::{
-    self, Complex64, Extend, FitOptions, FittedCell, Group, Optimization, SampleOptions, Side,
-    check_surface, fit_samples, minkowski_difference, minkowski_sum, weighted_average,
+    self, Complex64, Extend, FitOptions, FittedCell, Group, OptimizationTargets, SampleOptions,
+    Side, check_surface, fit_samples, minkowski_difference, minkowski_sum, weighted_average,
 };
 
 use super::StageError;
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::{FitResolution, GroupSpec, MinkowskiOp, Symmetric};
 
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
 
 const SAMPLES_MAGIC: &[u8; 8] = b"LBSAMP01";
 
@@ -78,7 +78,9 @@ pub struct ConstraintSummary {
 /// What `optimize` did (docs/method.md §Coefficient optimisation), for `latticebuild cell`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct OptimizationSummary {
-    pub target: f64,
+    /// The volume-fraction target; `None` for a surface area alone.
+    #[serde(default)]
+    pub target: Option<f64>,
     /// The sharp volume fraction of the reference element reached.
     pub reached: f64,
     pub converged: bool,
@@ -87,18 +89,55 @@ pub struct OptimizationSummary {
     /// Per iterate (0: the cell before): the smoothed volume fraction, `‖c − c₀‖` and the
     /// smoothing half-width (cell units).
     pub iterations: Vec<(f64, f64, f64)>,
+    /// With a `surface_area` target: the target, what was reached (sharp) and the smoothed
+    /// area per iterate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surface_area: Option<AreaSummary>,
+    /// The sharp measures of the cell before and after (docs/method.md §Surface area).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub before: Option<Measures>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub after: Option<Measures>,
+}
+
+/// A surface-area target and what became of it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AreaSummary {
+    pub target: f64,
+    pub reached: f64,
+    /// The smoothed area density per iterate.
+    pub iterations: Vec<f64>,
+}
+
+/// A cell's volume fraction and surface-area density in its reference element.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Measures {
+    pub volume_fraction: f64,
+    pub surface_area: f64,
 }
 
 impl OptimizationSummary {
     /// The warning for a run that did not converge, with what it reached.
     pub fn warning(&self) -> Option<String> {
         (!self.converged).then(|| {
+            let mut missed = Vec::new();
+            if let Some(target) = self.target {
+                missed.push(format!(
+                    "the volume fraction reached is {:.4}, not {:.4}",
+                    self.reached, target
+                ));
+            }
+            if let Some(a) = &self.surface_area {
+                missed.push(format!(
+                    "the surface area reached is {:.4}, not {:.4}",
+                    a.reached, a.target
+                ));
+            }
             format!(
-                "optimize did not converge in {} iterations: the volume fraction reached is {:.4}, \
-                 not {:.4}; raise `max_iterations` or loosen `tolerance`",
+                "optimize did not converge in {} iterations: {}; raise `max_iterations` or loosen \
+                 `tolerance`",
                 self.iterations.len().saturating_sub(1),
-                self.reached,
-                self.target
+                missed.join(", and ")
             )
         })
     }
@@ -389,7 +428,8 @@ impl ConstrainStage {
                 Param::List(match self.spec.optimize {
                     None => Vec::new(),
                     Some(o) => vec![
-                        Param::F64(o.volume_fraction),
+                        Param::F64(o.volume_fraction.unwrap_or(-1.0)),
+                        Param::F64(o.surface_area.unwrap_or(-1.0)),
                         Param::U64(o.max_iterations as u64),
                         Param::F64(o.tolerance),
                     ],
@@ -421,8 +461,9 @@ impl ConstrainStage {
         }
         let mut optimization = None;
         if let Some(o) = self.spec.optimize {
-            let (optimized, report) = cell.optimize(&Optimization {
+            let (optimized, report) = cell.optimize_for(&OptimizationTargets {
                 volume_fraction: o.volume_fraction,
+                surface_area: o.surface_area,
                 keep_face_normal: self.spec.normal_to_faces,
                 max_iterations: o.max_iterations,
                 tolerance: o.tolerance,
@@ -438,6 +479,19 @@ impl ConstrainStage {
                     .iter()
                     .map(|i| (i.volume_fraction, i.change, i.smoothing))
                     .collect(),
+                surface_area: report.area_target.map(|target| AreaSummary {
+                    target,
+                    reached: report.area_reached,
+                    iterations: report.iterates.iter().map(|i| i.surface_area).collect(),
+                }),
+                before: Some(Measures {
+                    volume_fraction: report.before.volume_fraction,
+                    surface_area: report.before.surface_area,
+                }),
+                after: Some(Measures {
+                    volume_fraction: report.reached,
+                    surface_area: report.area_reached,
+                }),
             });
         }
         let mut payload = FittedPayload::new(&cell, &self.spec, constraint);

@@ -14,7 +14,7 @@ use latticebuild_geom::symmetric::{
 use std::f64::consts::TAU;
 
 /// Oh and Td elements written out: signed permutations (Td keeps those with product +1).
-fn signed_perms(positive_only: bool) -> Vec<Matrix> {
+pub(crate) fn signed_perms(positive_only: bool) -> Vec<Matrix> {
     let perms = [
         [0, 1, 2],
         [0, 2, 1],
@@ -40,7 +40,7 @@ fn signed_perms(positive_only: bool) -> Vec<Matrix> {
     out
 }
 
-fn random_points(count: usize) -> Vec<[f64; 3]> {
+pub(crate) fn random_points(count: usize) -> Vec<[f64; 3]> {
     let mut s = 0x9e37_79b9_7f4a_7c15u64;
     let mut rnd = || {
         s = s
@@ -52,14 +52,14 @@ fn random_points(count: usize) -> Vec<[f64; 3]> {
 }
 
 /// Fraction of midpoint samples with `Φ ≤ 0` over the reference element.
-fn counted_fraction(cell: &FittedCell, element: ReferenceElement, n: usize) -> f64 {
+pub(crate) fn counted_fraction(cell: &FittedCell, element: ReferenceElement, n: usize) -> f64 {
     let values = density::sample(cell, Region::Element(element), n);
     let kept: Vec<f64> = values.into_iter().filter(|v| !v.is_nan()).collect();
     kept.iter().filter(|&&v| v <= 0.0).count() as f64 / kept.len() as f64
 }
 
 /// `‖a − b‖` over the union of the coefficients.
-fn distance(a: &FittedCell, b: &FittedCell) -> f64 {
+pub(crate) fn distance(a: &FittedCell, b: &FittedCell) -> f64 {
     let mut fs: Vec<[i32; 3]> = a.coefficients().iter().map(|c| c.f).collect();
     fs.extend(b.coefficients().iter().map(|c| c.f));
     fs.sort_unstable();
@@ -70,7 +70,7 @@ fn distance(a: &FittedCell, b: &FittedCell) -> f64 {
         .sqrt()
 }
 
-fn wavy(x: [f64; 3]) -> f64 {
+pub(crate) fn wavy(x: [f64; 3]) -> f64 {
     let [c0, c1, c2] = x.map(|v| (TAU * v).cos());
     c0 + c1 + c2 - 0.4 * c0 * c1 * c2
 }
@@ -133,7 +133,7 @@ fn oh_cell_reaches_the_target_with_less_change_than_a_level_shift() {
 
 /// Max |∇Φ·n| over a barycentric grid on the tetrahedron's faces, gradients by direct
 /// summation (the cell's own `value_gradient`, not the constraint's line sums).
-fn tet_face_residual(cell: &FittedCell, m: usize) -> f64 {
+pub(crate) fn tet_face_residual(cell: &FittedCell, m: usize) -> f64 {
     let p = [
         [-0.5, -0.5, -0.5],
         [0.5, 0.5, -0.5],
@@ -164,7 +164,7 @@ fn tet_face_residual(cell: &FittedCell, m: usize) -> f64 {
     worst
 }
 
-fn td_source(x: [f64; 3]) -> f64 {
+pub(crate) fn td_source(x: [f64; 3]) -> f64 {
     0.6 * (TAU * x[0]).sin() * (TAU * x[1]).sin() * (TAU * x[2]).sin()
         + (x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
         - 0.15

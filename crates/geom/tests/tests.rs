@@ -32,6 +32,7 @@ mod sdf_semantics;
 mod symmetric_constrain;
 mod symmetric_math;
 mod symmetric_optimize;
+mod symmetric_optimize_area;
 mod tile_2d;
 mod tile_gradient_jump;
 mod tile_scaffolds;

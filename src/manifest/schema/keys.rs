@@ -74,7 +74,12 @@ pub(super) const SAMPLING_KEYS: [&str; 2] = ["extend", "symmetrize"];
 
 pub(super) const FIT_KEYS: [&str; 3] = ["n", "tolerance", "max_n"];
 
-pub(super) const OPTIMIZE_KEYS: [&str; 3] = ["volume_fraction", "max_iterations", "tolerance"];
+pub(super) const OPTIMIZE_KEYS: [&str; 4] = [
+    "volume_fraction",
+    "surface_area",
+    "max_iterations",
+    "tolerance",
+];
 
 pub(super) const GENERATOR_KEYS: [&str; 2] = ["generators", "dimension"];
 

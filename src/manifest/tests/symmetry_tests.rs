@@ -100,6 +100,11 @@ pub(super) const SYM_ERR_CASES: &[ErrCase] = &[
         sets: &[],
     },
     ErrCase {
+        name: "optimize: a negative surface area and an infinite one",
+        manifest: "[cells.a]\ntpms = \"p\"\nsymmetry = \"Oh\"\noptimize = { surface_area = -1.5 }\n\n[cells.b]\ntpms = \"p\"\nsymmetry = \"Oh\"\noptimize = { volume_fraction = 0.3, surface_area = inf }\n",
+        sets: &[],
+    },
+    ErrCase {
         name: "keys that do not apply to a blend",
         manifest: "[cells.a]\ntpms = \"p\"\nsymmetry = \"Oh\"\n\n[cells.m]\nblend = { cells = [\"a\"], weights = [1] }\nsymmetry = \"Oh\"\nextend = \"none\"\n",
         sets: &[],
@@ -206,7 +211,8 @@ fit = { n = 8192 }
             offset: -0.1,
             invert: true,
             optimize: Some(Optimize {
-                volume_fraction: 0.25,
+                volume_fraction: Some(0.25),
+                surface_area: None,
                 max_iterations: 12,
                 tolerance: 1e-4,
             }),

@@ -39,6 +39,7 @@
 pub mod auto;
 pub mod basis;
 pub mod blend;
+mod coefficient_space;
 pub mod constrain;
 pub mod domain;
 pub mod eval;
@@ -46,6 +47,8 @@ mod fft;
 pub mod fit;
 pub mod frequency;
 pub mod group;
+pub mod measure;
+mod objective;
 pub mod optimize;
 mod row_space;
 mod sampler;
@@ -62,5 +65,6 @@ pub use group::{
     Domain, Frame, Group, GroupError, IDENTITY, MAX_GROUP_ORDER, Matrix, ReferenceElement,
     TETRAHEDRON_FACE_NORMALS,
 };
-pub use optimize::{Iterate, Optimization, OptimizationReport};
+pub use measure::{CellMeasures, measure};
+pub use optimize::{Iterate, Optimization, OptimizationReport, OptimizationTargets};
 pub use rustfft::num_complex::Complex64;

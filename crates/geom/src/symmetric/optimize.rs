@@ -1,6 +1,12 @@
-//! Coefficient optimisation (docs/method.md §Coefficient optimisation): the cell closest to a
-//! fitted one, in the basis's L² norm, whose solid `{Φ ≤ 0}` fills a target volume fraction
-//! of its reference element.
+//! Coefficient optimisation (docs/method.md §Coefficient optimisation, §Surface area): the
+//! cell closest to a fitted one, in the basis's L² norm, whose solid `{Φ ≤ 0}` fills a target
+//! volume fraction of its reference element and/or whose surface has a target area density.
+//!
+//! Surface area (the volume-only path below is unchanged, to the bit): the constraint value
+//! is the sharp marching area on the optimisation grid ([`super::measure`]), its gradient the
+//! curvature form `−w δ_ε(d) κ/|∇Φ|` fitted like the volume's (`objective.rs`); with both
+//! targets the steps solve the 2×2 system `J Jᵀ λ = r` (restoration) and go to `c₀ + Jᵀμ`
+//! (least change); residuals are scaled (`|V − V*|`, `|A − A*|/A*`).
 //!
 //! Method and why:
 //! - Problem: `min ‖c − c₀‖` subject to `V(c) = V*` (and, when asked, the face-normal rows
@@ -41,12 +47,13 @@
 //! projected, so a cell that met the face-normal condition still does; the same bits for any
 //! thread count (grids and fits are).
 
-use rustfft::num_complex::Complex64;
-
-use super::fit::{Coefficient, FitError, FittedCell, fit_samples};
-use super::group::ReferenceElement;
-use crate::contour2d::Element2;
-use crate::element::Element3;
+use super::coefficient_space::Vector;
+use super::fit::{FitError, FittedCell, fit_samples};
+use super::measure::{CellMeasures, sharp_area, sharp_fraction};
+use super::objective::{
+    GridSamples, area_gradient_samples, element_weights, grid_samples, smoothed_area,
+    smoothed_volume, volume_gradient_samples,
+};
 
 /// Samples per axis of the optimisation grid for 3D and 2D groups.
 pub const OPTIMIZE_GRID_3D: usize = 64;
@@ -82,7 +89,8 @@ const LEAST_CHANGE_HALVINGS: usize = 4;
 const RESTORE_STEPS: usize = 4;
 const LEAST_CHANGE_STALL: f64 = 1e-3;
 
-/// What to optimise for.
+/// What to optimise for: a volume fraction (the original interface; see
+/// [`OptimizationTargets`] for the surface area).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Optimization {
     /// Target volume fraction of the solid `{Φ ≤ 0}` in the reference element, in (0, 1).
@@ -95,11 +103,39 @@ pub struct Optimization {
     pub tolerance: f64,
 }
 
+/// What to optimise for: a volume fraction, a surface-area density, or both.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OptimizationTargets {
+    /// Target volume fraction of the solid `{Φ ≤ 0}` in the reference element, in (0, 1).
+    pub volume_fraction: Option<f64>,
+    /// Target surface-area density (area of `{Φ = 0}` in the element per element volume,
+    /// perimeter per area in 2D; [`super::measure`]), positive.
+    pub surface_area: Option<f64>,
+    pub keep_face_normal: bool,
+    pub max_iterations: usize,
+    /// Tolerance on `|V − V*|`, and on `|A − A*| / A*`.
+    pub tolerance: f64,
+}
+
+impl From<&Optimization> for OptimizationTargets {
+    fn from(o: &Optimization) -> OptimizationTargets {
+        OptimizationTargets {
+            volume_fraction: Some(o.volume_fraction),
+            surface_area: None,
+            keep_face_normal: o.keep_face_normal,
+            max_iterations: o.max_iterations,
+            tolerance: o.tolerance,
+        }
+    }
+}
+
 /// One iterate.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Iterate {
     /// `V(c_k)` (smoothed, on the optimisation grid).
     pub volume_fraction: f64,
+    /// `A(c_k)` (smoothed, on the optimisation grid).
+    pub surface_area: f64,
     /// `‖c_k − c₀‖`.
     pub change: f64,
     /// The smoothing half-width `ε` of `V` (cell units) at this iterate.
@@ -110,98 +146,37 @@ pub struct Iterate {
 #[derive(Clone, Debug, PartialEq)]
 pub struct OptimizationReport {
     pub converged: bool,
-    pub target: f64,
+    /// The volume-fraction target, if any.
+    pub target: Option<f64>,
     /// The volume fraction reached: the share of samples with `Φ ≤ 0` on a grid twice as
     /// fine as the optimisation's (not smoothed).
     pub reached: f64,
+    /// The surface-area target, if any.
+    pub area_target: Option<f64>,
+    /// The surface-area density reached, measured sharply on the same grid
+    /// ([`super::measure`]).
+    pub area_reached: f64,
+    /// The starting cell's sharp measures on that grid.
+    pub before: CellMeasures,
     /// `‖c − c₀‖` of the result.
     pub change: f64,
     /// Iterate 0 is the starting cell.
     pub iterates: Vec<Iterate>,
 }
 
-/// Coefficients by frequency, sorted; the vector space the optimisation walks in.
-#[derive(Clone, Debug, Default)]
-struct Vector(Vec<([i32; 3], Complex64)>);
-
-impl Vector {
-    fn of(cell: &FittedCell) -> Vector {
-        Vector(cell.coefficients.iter().map(|c| (c.f, c.c)).collect())
-    }
-
-    /// `a·self + b·other`, over the union of frequencies.
-    fn combine(&self, a: f64, other: &Vector, b: f64) -> Vector {
-        let (x, y) = (&self.0, &other.0);
-        let (mut i, mut j) = (0, 0);
-        let mut out = Vec::with_capacity(x.len().max(y.len()));
-        while i < x.len() || j < y.len() {
-            let take_x = j == y.len() || (i < x.len() && x[i].0 <= y[j].0);
-            let take_y = i == x.len() || (j < y.len() && y[j].0 <= x[i].0);
-            let f = if take_x { x[i].0 } else { y[j].0 };
-            let mut v = Complex64::new(0.0, 0.0);
-            if take_x {
-                v += x[i].1 * a;
-                i += 1;
-            }
-            if take_y {
-                v += y[j].1 * b;
-                j += 1;
-            }
-            out.push((f, v));
-        }
-        Vector(out)
-    }
-
-    /// The real inner product `Re Σ conj(a_f) b_f`.
-    fn dot(&self, other: &Vector) -> f64 {
-        let (x, y) = (&self.0, &other.0);
-        let (mut i, mut j, mut sum) = (0, 0, 0.0);
-        while i < x.len() && j < y.len() {
-            match x[i].0.cmp(&y[j].0) {
-                std::cmp::Ordering::Less => i += 1,
-                std::cmp::Ordering::Greater => j += 1,
-                std::cmp::Ordering::Equal => {
-                    sum += (x[i].1.conj() * y[j].1).re;
-                    i += 1;
-                    j += 1;
-                }
-            }
-        }
-        sum
-    }
-
-    fn norm(&self) -> f64 {
-        self.0.iter().map(|e| e.1.norm_sqr()).sum::<f64>().sqrt()
-    }
-
-    fn cell(&self, like: &FittedCell, n: usize) -> FittedCell {
-        let group = &like.group;
-        let cs = self
-            .0
-            .iter()
-            .map(|&(f, c)| Coefficient {
-                f,
-                c,
-                k_f: group.normalization(f),
-            })
-            .collect();
-        FittedCell::new_unchecked(group.clone(), n, cs)
-    }
+/// A constrained quantity.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    Volume,
+    Area,
 }
 
-/// The smoothed Heaviside and its derivative (module docs).
-fn heaviside(t: f64, eps: f64) -> (f64, f64) {
-    use std::f64::consts::PI;
-    if t <= -eps {
-        (0.0, 0.0)
-    } else if t >= eps {
-        (1.0, 0.0)
+/// The grid of the optimisation for this cell (module docs).
+pub(super) fn optimization_grid(cell: &FittedCell) -> usize {
+    if cell.group.dimension() == 3 {
+        cell.n.clamp(32, OPTIMIZE_GRID_3D)
     } else {
-        let a = PI * t / eps;
-        (
-            0.5 * (1.0 + t / eps + a.sin() / PI),
-            (1.0 + a.cos()) / (2.0 * eps),
-        )
+        cell.n.clamp(64, OPTIMIZE_GRID_2D)
     }
 }
 
@@ -215,29 +190,61 @@ struct Problem<'a> {
     weight_sum: f64,
     eps: f64,
     keep_face_normal: bool,
+    kinds: Vec<Kind>,
 }
 
 impl Problem<'_> {
-    /// `V(c)` and `(Φ/|∇Φ|, |∇Φ|)` at the grid points.
-    fn volume(&self, cell: &FittedCell) -> Result<(f64, Vec<(f64, f64)>), FitError> {
-        let phi = distances(cell, self.grid)?;
-        let v: f64 = phi
+    /// The constrained values (in the order of `kinds`), `(V, A)` and the grid samples at
+    /// `cell`. `V` is smoothed; `A` is the sharp marching area on the optimisation grid when
+    /// it is a target (its first variation is the curvature form of the gradient, and it
+    /// has neither the smoothed sum's bias nor its grid noise: module docs), the smoothed
+    /// `A_ε` otherwise (only reported).
+    fn evaluate(&self, cell: &FittedCell) -> Result<Evaluation, FitError> {
+        let curvature = self.kinds.contains(&Kind::Area);
+        let samples = grid_samples(cell, self.grid, curvature)?;
+        let volume = smoothed_volume(&samples, &self.weights, self.eps);
+        let area = if curvature {
+            sharp_area(cell, self.grid)?
+        } else {
+            smoothed_area(&samples, &self.weights, self.eps)
+        };
+        let values = self
+            .kinds
             .iter()
-            .zip(&self.weights)
-            .map(|(&(h, _), &w)| w * heaviside(-h, self.eps).0)
-            .sum();
-        Ok((v / self.weight_sum, phi))
+            .map(|k| match k {
+                Kind::Volume => volume,
+                Kind::Area => area,
+            })
+            .collect();
+        Ok(Evaluation {
+            values,
+            volume,
+            area,
+            samples,
+        })
     }
 
-    /// `P∇V` at the cell whose distances are `phi` (`|∇Φ|` held fixed: Gauss–Newton).
-    fn gradient(&self, phi: &[(f64, f64)]) -> Result<Vector, FitError> {
-        let m = phi.len() as f64;
-        let samples: Vec<f64> = phi
+    /// `P∇F_i` per constraint at the cell whose grid samples are `samples`.
+    fn gradients(&self, samples: &GridSamples) -> Result<Vec<Vector>, FitError> {
+        self.kinds
             .iter()
-            .zip(&self.weights)
-            .map(|(&(h, g), &w)| -w * heaviside(-h, self.eps).1 / g * m / self.weight_sum)
-            .collect();
-        let g = fit_samples(&self.start.group, self.grid, &samples)?;
+            .map(|k| {
+                let s = match k {
+                    Kind::Volume => {
+                        volume_gradient_samples(samples, &self.weights, self.weight_sum, self.eps)
+                    }
+                    Kind::Area => {
+                        area_gradient_samples(samples, &self.weights, self.weight_sum, self.eps)
+                    }
+                };
+                self.band_projection(&s)
+            })
+            .collect()
+    }
+
+    /// The fit of gradient samples, kept to the change band and projected (module docs).
+    fn band_projection(&self, samples: &[f64]) -> Result<Vector, FitError> {
+        let g = fit_samples(&self.start.group, self.grid, samples)?;
         let smooth = g
             .coefficients
             .into_iter()
@@ -252,89 +259,34 @@ impl Problem<'_> {
     }
 }
 
-/// Indicator of the group's reference element at the domain grid's points (½ on its
-/// boundary); all ones where the element is the domain or there is none.
-fn element_weights(cell: &FittedCell, grid: usize) -> Vec<f64> {
-    let group = &cell.group;
-    let d = group.dimension();
-    let m = grid.pow(d as u32);
-    let inside: Option<Box<dyn Fn([f64; 3]) -> f64>> = match group.reference_element() {
-        Some(ReferenceElement::Tetrahedron) => {
-            Some(Box::new(|x| Element3::Tetrahedron.signed_distance(x)))
+/// The Gauss–Newton system `J Jᵀ λ = r` for one or two constraints; `None` when `J Jᵀ` is
+/// singular (a zero gradient, or two parallel ones: the targets cannot move independently).
+fn solve_gram(g: &[Vector], r: &[f64]) -> Option<Vec<f64>> {
+    match g.len() {
+        1 => {
+            let gg = g[0].dot(&g[0]);
+            (gg > 0.0).then(|| vec![r[0] / gg])
         }
-        Some(ReferenceElement::Triangle) => Some(Box::new(|x| {
-            Element2::Triangle.signed_distance([x[0], x[1]])
-        })),
-        _ => None,
-    };
-    let Some(inside) = inside else {
-        return vec![1.0; m];
-    };
-    let domain = group.domain();
-    let (origin, frame) = (domain.origin(), domain.frame());
-    let tiny = 1e-9;
-    (0..m)
-        .map(|p| {
-            let idx = [p % grid, (p / grid) % grid, p / (grid * grid)];
-            let s: [f64; 3] = std::array::from_fn(|a| {
-                if a < d {
-                    origin[a] + idx[a] as f64 / grid as f64
-                } else {
-                    0.0
-                }
-            });
-            let sd = inside(frame.to_cartesian(s));
-            if sd < -tiny {
-                1.0
-            } else if sd <= tiny {
-                0.5
-            } else {
-                0.0
+        2 => {
+            let (a, b, c) = (g[0].dot(&g[0]), g[0].dot(&g[1]), g[1].dot(&g[1]));
+            let det = a * c - b * b;
+            if !(det > 1e-10 * a * c) {
+                return None;
             }
-        })
-        .collect()
+            Some(vec![
+                (c * r[0] - b * r[1]) / det,
+                (a * r[1] - b * r[0]) / det,
+            ])
+        }
+        _ => None,
+    }
 }
 
-/// `(Φ/|∇Φ|, |∇Φ|)` on the domain grid: the first-order distance to the surface (cell units)
-/// with the gradient by central differences (Cartesian, through the frame).
-fn distances(cell: &FittedCell, grid: usize) -> Result<Vec<(f64, f64)>, FitError> {
-    let phi = cell.grid(grid)?;
-    let d = cell.group.dimension();
-    let frame = cell.group.domain().frame();
-    let strides = [1, grid, grid * grid];
-    let half_step = 0.5 * grid as f64;
-    let scale = phi.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    Ok((0..phi.len())
-        .map(|p| {
-            let idx = [p % grid, (p / grid) % grid, p / (grid * grid)];
-            let gs: [f64; 3] = std::array::from_fn(|a| {
-                if a >= d {
-                    return 0.0;
-                }
-                let up = p - idx[a] * strides[a] + (idx[a] + 1) % grid * strides[a];
-                let down = p - idx[a] * strides[a] + (idx[a] + grid - 1) % grid * strides[a];
-                (phi[up] - phi[down]) * half_step
-            });
-            let g = frame.gradient_to_cartesian(gs);
-            let norm = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
-                .sqrt()
-                .max(1e-12 * scale);
-            (phi[p] / norm, norm)
-        })
-        .collect())
-}
-
-/// The weighted share of the domain grid's samples with `Φ ≤ 0`.
-fn sharp_fraction(cell: &FittedCell, grid: usize) -> Result<f64, FitError> {
-    let weights = element_weights(cell, grid);
-    let phi = cell.grid(grid)?;
-    let inside: f64 = phi
-        .iter()
-        .zip(&weights)
-        .filter(|(v, _)| **v <= 0.0)
-        .map(|(_, w)| w)
-        .sum();
-    Ok(inside / weights.iter().sum::<f64>())
+/// `c + Σ α λ_i g_i`, added one gradient at a time (for one constraint, exactly `c + αλg`).
+fn step(c: &Vector, g: &[Vector], lambda: &[f64], alpha: f64) -> Vector {
+    g.iter()
+        .zip(lambda)
+        .fold(c.clone(), |acc, (gi, &l)| acc.combine(1.0, gi, alpha * l))
 }
 
 impl FittedCell {
@@ -347,12 +299,16 @@ impl FittedCell {
         &self,
         options: &Optimization,
     ) -> Result<(FittedCell, OptimizationReport), FitError> {
-        let d = self.group.dimension();
-        let grid = if d == 3 {
-            self.n.clamp(32, OPTIMIZE_GRID_3D)
-        } else {
-            self.n.clamp(64, OPTIMIZE_GRID_2D)
-        };
+        self.optimize_for(&OptimizationTargets::from(options))
+    }
+
+    /// As [`optimize`](Self::optimize), for a volume fraction, a surface-area density or both
+    /// (module docs). With neither, the cell is returned unchanged, converged.
+    pub fn optimize_for(
+        &self,
+        options: &OptimizationTargets,
+    ) -> Result<(FittedCell, OptimizationReport), FitError> {
+        let grid = optimization_grid(self);
         let weights = element_weights(self, grid);
         let weight_sum: f64 = weights.iter().sum();
         let phi0 = self.grid(grid)?;
@@ -368,6 +324,24 @@ impl FittedCell {
                 side: super::fit::Side::Zero,
             });
         }
+        let mut kinds = Vec::new();
+        let mut targets = Vec::new();
+        let mut scales = Vec::new();
+        if let Some(v) = options.volume_fraction {
+            kinds.push(Kind::Volume);
+            targets.push(v);
+            scales.push(1.0);
+        }
+        if let Some(a) = options.surface_area {
+            kinds.push(Kind::Area);
+            targets.push(a);
+            scales.push(a);
+        }
+        let sharp_grid = 2 * grid;
+        let before = CellMeasures {
+            volume_fraction: sharp_fraction(self, sharp_grid)?,
+            surface_area: sharp_area(self, sharp_grid)?,
+        };
         let mut problem = Problem {
             start: self,
             grid,
@@ -376,17 +350,16 @@ impl FittedCell {
             weight_sum,
             eps: 0.0,
             keep_face_normal: options.keep_face_normal,
+            kinds: kinds.clone(),
         };
-        let target = options.volume_fraction;
         let c0 = Vector::of(self);
         let mut state = State {
             cell: self.clone(),
             c: c0.clone(),
-            v: 0.0,
-            phi: Vec::new(),
+            at: None,
         };
         let mut iterates = Vec::new();
-        let mut met = false;
+        let mut met = true;
         // Continuation in ε: each band twice the next, the last the final one (module docs).
         let final_band = BAND_CELLS / grid as f64;
         let stages = (0..)
@@ -396,14 +369,15 @@ impl FittedCell {
         let mut walk = Walk {
             problem: &mut problem,
             c0: &c0,
-            target,
+            targets: targets.clone(),
+            scales: &scales,
             budget: options.max_iterations,
             iterates: &mut iterates,
         };
         for stage in (0..stages).rev() {
             let band = final_band * f64::from(1u32 << stage);
             walk.problem.eps = band;
-            (state.v, state.phi) = walk.problem.volume(&state.cell)?;
+            state.at = Some(walk.problem.evaluate(&state.cell)?);
             if walk.iterates.is_empty() {
                 walk.record(&state);
             }
@@ -416,26 +390,56 @@ impl FittedCell {
             met = walk.restore(&mut state, tolerance)?;
         }
         let mut converged = met && walk.least_change(&mut state, options.tolerance)?;
-        // Defect correction: the smoothed V is biased by about ε² times the mean curvature;
-        // aim the smoothed target off by the sharp count's difference (module docs).
-        let sharp_grid = 2 * grid;
-        let mut reached = sharp_fraction(&state.cell, sharp_grid)?;
+        // Defect correction: the smoothed values are biased by about ε² times curvatures;
+        // aim the smoothed targets off by the sharp measures' differences (module docs).
+        let sharp = |cell: &FittedCell, kind: Kind| match kind {
+            Kind::Volume => sharp_fraction(cell, sharp_grid),
+            Kind::Area => sharp_area(cell, sharp_grid),
+        };
+        let close = |reached: &[f64]| {
+            reached
+                .iter()
+                .zip(&targets)
+                .zip(&scales)
+                .all(|((r, t), s)| (r - t).abs() / s <= SHARP_TOLERANCE_FACTOR * options.tolerance)
+        };
+        let mut reached = kinds
+            .iter()
+            .map(|&k| sharp(&state.cell, k))
+            .collect::<Result<Vec<_>, _>>()?;
         for _ in 0..CORRECTIONS {
-            if (reached - target).abs() <= SHARP_TOLERANCE_FACTOR * options.tolerance {
+            if close(&reached) {
                 break;
             }
-            walk.target += target - reached;
+            for (i, r) in reached.iter().enumerate() {
+                walk.targets[i] += targets[i] - r;
+            }
             converged = walk.restore(&mut state, options.tolerance)?;
-            reached = sharp_fraction(&state.cell, sharp_grid)?;
+            reached = kinds
+                .iter()
+                .map(|&k| sharp(&state.cell, k))
+                .collect::<Result<Vec<_>, _>>()?;
         }
-        converged &= (reached - target).abs() <= SHARP_TOLERANCE_FACTOR * options.tolerance;
+        converged &= close(&reached);
         let change = state.c.combine(1.0, &c0, -1.0).norm();
+        let of = |kind: Kind| kinds.iter().position(|&k| k == kind).map(|i| reached[i]);
+        let volume_reached = match of(Kind::Volume) {
+            Some(v) => v,
+            None => sharp_fraction(&state.cell, sharp_grid)?,
+        };
+        let area_reached = match of(Kind::Area) {
+            Some(a) => a,
+            None => sharp_area(&state.cell, sharp_grid)?,
+        };
         Ok((
             state.cell,
             OptimizationReport {
                 converged,
-                target,
-                reached,
+                target: options.volume_fraction,
+                reached: volume_reached,
+                area_target: options.surface_area,
+                area_reached,
+                before,
                 change,
                 iterates,
             },
@@ -443,19 +447,37 @@ impl FittedCell {
     }
 }
 
-/// The current iterate: coefficients, cell, `V` and grid values.
+/// The smoothed values and grid samples of one cell.
+struct Evaluation {
+    /// Per constraint, in the problem's order.
+    values: Vec<f64>,
+    volume: f64,
+    area: f64,
+    samples: GridSamples,
+}
+
+/// The current iterate: coefficients, cell and its evaluation (`None` before the first).
 struct State {
     cell: FittedCell,
     c: Vector,
-    v: f64,
-    phi: Vec<(f64, f64)>,
+    at: Option<Evaluation>,
+}
+
+impl State {
+    fn values(&self) -> &[f64] {
+        self.at.as_ref().map_or(&[], |e| &e.values)
+    }
 }
 
 /// The two kinds of steps and what they share.
 struct Walk<'p, 'a> {
     problem: &'p mut Problem<'a>,
     c0: &'p Vector,
-    target: f64,
+    /// The smoothed targets (moved by the sharp correction).
+    targets: Vec<f64>,
+    /// What each residual is measured against: 1 for the volume fraction, the target for the
+    /// area (a relative tolerance).
+    scales: &'p [f64],
     /// Steps left.
     budget: usize,
     iterates: &'p mut Vec<Iterate>,
@@ -468,8 +490,10 @@ impl Walk<'_, '_> {
 
     fn record(&mut self, state: &State) {
         let change = self.change(&state.c);
+        let (volume, area) = state.at.as_ref().map_or((0.0, 0.0), |e| (e.volume, e.area));
         self.iterates.push(Iterate {
-            volume_fraction: state.v,
+            volume_fraction: volume,
+            surface_area: area,
             change,
             smoothing: self.problem.eps,
         });
@@ -477,31 +501,63 @@ impl Walk<'_, '_> {
 
     fn evaluate(&self, c: Vector) -> Result<State, FitError> {
         let cell = c.cell(self.problem.start, self.problem.n);
-        let (v, phi) = self.problem.volume(&cell)?;
-        Ok(State { cell, c, v, phi })
+        let at = Some(self.problem.evaluate(&cell)?);
+        Ok(State { cell, c, at })
     }
 
-    /// Newton steps on `V` along the projected gradient, `c + t g` with
-    /// `t = (V* − V)/‖g‖²`, halved until `|V − V*|` shrinks, until within `tolerance`.
-    /// Each step adds a band-limited bump at the current surface, so the surface moves
-    /// along its normal. False when the budget ran out or no step helped.
+    /// `targets − values`, unscaled.
+    fn residuals(&self, values: &[f64]) -> Vec<f64> {
+        self.targets
+            .iter()
+            .zip(values)
+            .map(|(t, v)| t - v)
+            .collect()
+    }
+
+    /// The size of the scaled residual: `|r|` for one constraint, its Euclidean norm for more.
+    fn merit(&self, values: &[f64]) -> f64 {
+        let scaled = values
+            .iter()
+            .zip(&self.targets)
+            .zip(self.scales)
+            .map(|((v, t), s)| (v - t).abs() / s);
+        if values.len() == 1 {
+            scaled.sum()
+        } else {
+            scaled.map(|r| r * r).sum::<f64>().sqrt()
+        }
+    }
+
+    fn within(&self, values: &[f64], tolerance: f64) -> bool {
+        values
+            .iter()
+            .zip(&self.targets)
+            .zip(self.scales)
+            .all(|((v, t), s)| (v - t).abs() / s <= tolerance)
+    }
+
+    /// Gauss–Newton steps on the constraints along the projected gradients,
+    /// `c + Σ λ_i g_i` with `J Jᵀ λ = r`, halved until the residual shrinks, until within
+    /// `tolerance`. Each step adds band-limited bumps at the current surface, so the surface
+    /// moves along its normal. False when the budget ran out or no step helped.
     fn restore(&mut self, state: &mut State, tolerance: f64) -> Result<bool, FitError> {
-        while (state.v - self.target).abs() > tolerance {
+        while !self.within(state.values(), tolerance) {
             if self.budget == 0 {
                 return Ok(false);
             }
-            let g = self.problem.gradient(&state.phi)?;
-            let gg = g.dot(&g);
-            if gg <= 0.0 {
+            let Some(at) = &state.at else {
                 return Ok(false);
-            }
-            let t = (self.target - state.v) / gg;
-            let before = (state.v - self.target).abs();
+            };
+            let g = self.problem.gradients(&at.samples)?;
+            let Some(lambda) = solve_gram(&g, &self.residuals(&at.values)) else {
+                return Ok(false);
+            };
+            let before = self.merit(&at.values);
             let mut accepted = None;
             let mut alpha = 1.0;
             for _ in 0..=LINE_SEARCH_HALVINGS {
-                let trial = self.evaluate(state.c.combine(1.0, &g, alpha * t))?;
-                if (trial.v - self.target).abs() < (1.0 - 0.25 * alpha) * before {
+                let trial = self.evaluate(step(&state.c, &g, &lambda, alpha))?;
+                if self.merit(trial.values()) < (1.0 - 0.25 * alpha) * before {
                     accepted = Some(trial);
                     break;
                 }
@@ -517,9 +573,9 @@ impl Walk<'_, '_> {
         Ok(true)
     }
 
-    /// From a point meeting the target, steps towards the point of the linearised constraint
-    /// nearest `c₀` (`c₀ + μ g`), each followed by restoration, kept only when `‖c − c₀‖`
-    /// shrinks and the target still holds; stops when it shrinks by less than
+    /// From a point meeting the targets, steps towards the point of the linearised
+    /// constraints nearest `c₀` (`c₀ + Jᵀμ`), each followed by restoration, kept only when
+    /// `‖c − c₀‖` shrinks and the targets still hold; stops when it shrinks by less than
     /// [`LEAST_CHANGE_STALL`] of itself or no step shrinks it (true), or the budget runs out
     /// (false).
     fn least_change(&mut self, state: &mut State, tolerance: f64) -> Result<bool, FitError> {
@@ -527,19 +583,26 @@ impl Walk<'_, '_> {
             if self.budget == 0 {
                 return Ok(false);
             }
-            let g = self.problem.gradient(&state.phi)?;
-            let gg = g.dot(&g);
-            if gg <= 0.0 {
-                return Ok(true);
-            }
+            let Some(at) = &state.at else {
+                return Ok(false);
+            };
+            let g = self.problem.gradients(&at.samples)?;
             let to_start = self.c0.combine(1.0, &state.c, -1.0);
-            let mu = (self.target - state.v - g.dot(&to_start)) / gg;
-            let step = self.c0.combine(1.0, &g, mu).combine(1.0, &state.c, -1.0);
+            let rhs: Vec<f64> = self
+                .residuals(&at.values)
+                .iter()
+                .zip(&g)
+                .map(|(r, gi)| r - gi.dot(&to_start))
+                .collect();
+            let Some(mu) = solve_gram(&g, &rhs) else {
+                return Ok(true);
+            };
+            let toward = step(self.c0, &g, &mu, 1.0).combine(1.0, &state.c, -1.0);
             let now = self.change(&state.c);
             let mut alpha = 1.0;
             let mut improved = None;
             for _ in 0..LEAST_CHANGE_HALVINGS {
-                let mut trial = self.evaluate(state.c.combine(1.0, &step, alpha))?;
+                let mut trial = self.evaluate(state.c.combine(1.0, &toward, alpha))?;
                 if self.restore_quietly(&mut trial, tolerance)? && self.change(&trial.c) < now {
                     improved = Some(trial);
                     break;
