@@ -18,6 +18,7 @@ use crate::commands::{self, Failure, ManifestArgs};
 #[command(
     name = "latticebuild",
     version,
+    propagate_version = true,
     about = "Build lattice microstructures from a TOML manifest through a cached stage DAG",
     long_about = "latticebuild turns a TOML manifest of unit cells and outputs into watertight \
                   lattice meshes. Every stage (cell, sample, fit, constrain, contour, write) is \
