@@ -870,6 +870,15 @@ impl<'a> Builder<'a> {
                 node.name
             ))),
         };
+        // Stages that do not count steps get a spinner, shown once they pass half a second
+        // (a big file's write, a chunked mesh's islands); the others start their own bar.
+        let spinner = match &node.stage {
+            Stage::File(_) | Stage::Contour(_) | Stage::Program(_) | Stage::Tile(_) => None,
+            _ => Some(self.progress.start(&node.name, 0)),
+        };
+        if let (Some(spinner), Stage::Write(_)) = (&spinner, &node.stage) {
+            spinner.phase("writing and measuring");
+        }
         match &node.stage {
             Stage::File(file) => {
                 Err(StageError::Internal(format!("`{}` is read, not run", file.given)).into())

@@ -1,10 +1,12 @@
-//! The command line: argument parsing, `--jobs`, and dispatch to the commands in
-//! [`crate::commands`], one module per command. Exit codes: 0 ok, 1 build failure, 2 usage or
-//! manifest error.
+//! The command line: argument parsing, `--jobs`, `--color`, and dispatch to the commands in
+//! [`crate::commands`], one module per command; `completions` prints a shell's completion
+//! script for this parser. Exit codes: 0 ok, 1 build failure, 2 usage or manifest error.
 
 use std::process::ExitCode;
 
-use clap::{CommandFactory, Parser, Subcommand};
+use std::io::IsTerminal;
+
+use clap::{CommandFactory, Parser, Subcommand, ValueEnum};
 
 use crate::commands::build::{BuildArgs, run_build};
 use crate::commands::cell::CellArgs;
@@ -16,6 +18,7 @@ use crate::commands::{self, Failure, ManifestArgs};
 #[command(
     name = "latticebuild",
     version,
+    propagate_version = true,
     about = "Build lattice microstructures from a TOML manifest through a cached stage DAG",
     long_about = "latticebuild turns a TOML manifest of unit cells and outputs into watertight \
                   lattice meshes. Every stage (cell, sample, fit, constrain, contour, write) is \
@@ -25,6 +28,21 @@ use crate::commands::{self, Failure, ManifestArgs};
 pub struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Colour diagnostics: `auto` only on a terminal (and not under `NO_COLOR`)
+    #[arg(long, global = true, value_enum, value_name = "WHEN", default_value_t = Color::Auto)]
+    color: Color,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+enum Color {
+    Auto,
+    Always,
+    Never,
+}
+
+/// The parser, for `cargo xtask man` and the completion scripts.
+pub fn command() -> clap::Command {
+    Cli::command()
 }
 
 #[derive(Subcommand, Debug)]
@@ -58,10 +76,26 @@ enum Command {
     Sdf(SdfArgs),
     /// Reconstruct the periodic surface through a crystal's atoms (CIF or extended XYZ)
     Crystal(CrystalArgs),
+    /// Print a completion script for SHELL (see the README for where to put it)
+    Completions {
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
 }
 
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
+    use crate::diagnostics::color::{self, ColorChoice};
+    let choice = match cli.color {
+        Color::Auto => ColorChoice::Auto,
+        Color::Always => ColorChoice::Always,
+        Color::Never => ColorChoice::Never,
+    };
+    color::set(color::decide(
+        choice,
+        std::io::stderr().is_terminal(),
+        |name: &str| std::env::var_os(name),
+    ));
     match cli.command {
         Command::Build(args) => {
             if let Err(f) = set_jobs(args.jobs) {
@@ -87,6 +121,15 @@ pub fn main() -> ExitCode {
         }
         Command::Sdf(args) => commands::sdf::run(&args),
         Command::Crystal(args) => commands::crystal::run(&args),
+        Command::Completions { shell } => {
+            clap_complete::generate(
+                shell,
+                &mut Cli::command(),
+                "latticebuild",
+                &mut std::io::stdout(),
+            );
+            ExitCode::SUCCESS
+        }
     }
 }
 
@@ -102,7 +145,12 @@ fn set_jobs(jobs: Option<usize>) -> Result<(), Failure> {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let most = (4 * cores).max(64);
     if jobs > most {
-        eprintln!("warning: `--jobs {jobs}` is more than this machine can use; using {most}");
+        eprint!(
+            "{}",
+            crate::diagnostics::color::paint(&format!(
+                "warning: `--jobs {jobs}` is more than this machine can use; using {most}\n"
+            ))
+        );
         jobs = most;
     }
     rayon::ThreadPoolBuilder::new()

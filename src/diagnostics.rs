@@ -5,7 +5,8 @@
 //!   column, the text of the line) is computed when it is created, so [`render`] needs no
 //!   source text and no file system.
 //! - Rendering is plain text, deterministic and free of colour, in the style of rustc and cargo:
-//!   messages are lower case, name things in backticks and end without a period.
+//!   messages are lower case, name things in backticks and end without a period. On a
+//!   terminal, [`color`] lays rustc's colours over the rendered text.
 //! - Nothing a file contains reaches the terminal raw: control characters (NUL, escape, a
 //!   lone carriage return…) are shown as their Unicode pictures (`␀`, `␛`, `␍`), as rustc
 //!   shows them, and invisible formatting characters (bidirectional overrides, zero-width
@@ -20,6 +21,8 @@
 //! test) whatever a dependency's next release decides about spacing or colour.
 
 use std::fmt::Write as _;
+
+pub mod color;
 
 /// One problem found in user input.
 #[derive(Clone, Debug, PartialEq, Eq)]

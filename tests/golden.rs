@@ -49,6 +49,7 @@ fn run_case(case: &Path, extra: &[&str]) -> std::process::Output {
     args.extend(extra.iter().map(|s| s.to_string()));
     Command::new(common::BIN)
         .args(&args)
+        .env_remove("CLICOLOR_FORCE")
         .current_dir(scratch.path())
         .output()
         .expect("run")

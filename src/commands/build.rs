@@ -8,6 +8,7 @@ use clap::{ArgAction, Args};
 
 use super::{Failure, ManifestArgs, compile, load_manifest, open_cache, sweep_outputs};
 use crate::build::Builder;
+use crate::diagnostics::color::paint;
 use crate::files::{OutputDir, write_atomically};
 use crate::progress::{Bars, NoProgress, Progress};
 use crate::report::Report;
@@ -118,7 +119,7 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
         if !args.quiet {
             eprintln!("{}", report.summary_line());
             for line in report.warning_lines() {
-                eprintln!("{line}");
+                eprint!("{}", paint(&format!("{line}\n")));
             }
         }
         reports.push(report);

@@ -24,6 +24,7 @@ use latticebuild_geom::periodic::model::{ChebyshevForm, PsTerm, describe_term};
 use latticebuild_geom::periodic::reconstruct::{Metrics, ReconstructOptions};
 use serde_json::json;
 
+use crate::diagnostics::color::paint;
 use crate::manifest::PsTransform;
 use crate::stages::crystal::{FoundSurface, reconstruct_crystal};
 
@@ -63,7 +64,7 @@ pub struct CrystalArgs {
 
 pub fn run(args: &CrystalArgs) -> ExitCode {
     let usage = |message: String| {
-        eprintln!("error: {message}");
+        eprint!("{}", paint(&format!("error: {message}\n")));
         ExitCode::from(2)
     };
     if !(args.tolerance > 0.0 && args.tolerance.is_finite()) {
@@ -122,9 +123,12 @@ pub fn run(args: &CrystalArgs) -> ExitCode {
     if r.converged {
         ExitCode::SUCCESS
     } else {
-        eprintln!(
-            "error: the error {:.3e} is above the tolerance {:e} at --max-scale {}",
-            r.metrics.max_error, args.tolerance, args.max_scale
+        eprint!(
+            "{}",
+            paint(&format!(
+                "error: the error {:.3e} is above the tolerance {:e} at --max-scale {}\n",
+                r.metrics.max_error, args.tolerance, args.max_scale
+            ))
         );
         ExitCode::from(1)
     }

@@ -9,6 +9,7 @@ use std::process::ExitCode;
 use clap::Args;
 
 use crate::cache::Cache;
+use crate::diagnostics::color::paint;
 use crate::diagnostics::render;
 use crate::graph::Graph;
 use crate::manifest::{self, Manifest};
@@ -42,11 +43,11 @@ impl Failure {
     pub fn exit(self) -> ExitCode {
         match self {
             Failure::Usage(text) => {
-                eprint!("{text}");
+                eprint!("{}", paint(&text));
                 ExitCode::from(2)
             }
             Failure::Build(text) => {
-                eprintln!("error: {text}");
+                eprint!("{}", paint(&format!("error: {text}\n")));
                 ExitCode::from(1)
             }
         }

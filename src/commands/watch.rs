@@ -26,6 +26,7 @@ use notify_debouncer_full::{DebounceEventResult, new_debouncer};
 
 use crate::commands::build::{BuildArgs, run_build};
 use crate::commands::{Failure, load_manifest};
+use crate::diagnostics::color::paint;
 use crate::interrupt::set_idle;
 
 /// What a watched file held: `None` when it could not be read as a regular file.
@@ -97,7 +98,10 @@ pub fn watch(args: &BuildArgs) -> ExitCode {
             .collect();
         for dir in dirs.difference(&watched_dirs) {
             if let Err(e) = debouncer.watch(dir, RecursiveMode::NonRecursive) {
-                eprintln!("warning: cannot watch `{}`: {e}", dir.display());
+                eprint!(
+                    "{}",
+                    paint(&format!("warning: cannot watch `{}`: {e}\n", dir.display()))
+                );
             }
         }
         for dir in watched_dirs.difference(&dirs) {
@@ -109,8 +113,8 @@ pub fn watch(args: &BuildArgs) -> ExitCode {
         set_idle(false);
         match run_build(args) {
             Ok(()) => {}
-            Err(Failure::Usage(text)) => eprint!("{text}"),
-            Err(Failure::Build(text)) => eprintln!("error: {text}"),
+            Err(Failure::Usage(text)) => eprint!("{}", paint(&text)),
+            Err(Failure::Build(text)) => eprint!("{}", paint(&format!("error: {text}\n"))),
         }
         set_idle(true);
         if !args.quiet {

@@ -26,10 +26,12 @@ impl Project {
         std::fs::write(self.path().join(name), text).expect("write");
     }
 
-    /// Runs `latticebuild ARGS` in the project directory.
+    /// Runs `latticebuild ARGS` in the project directory (stderr plain, whatever this
+    /// process's `CLICOLOR_FORCE`).
     pub fn run(&self, args: &[&str]) -> Output {
         Command::new(BIN)
             .args(args)
+            .env_remove("CLICOLOR_FORCE")
             .current_dir(self.path())
             .output()
             .expect("run latticebuild")
