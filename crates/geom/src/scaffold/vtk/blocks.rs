@@ -112,7 +112,7 @@ impl Encoding {
                 "compressed blocks hold {total} bytes, expected {expected}"
             ));
         }
-        let mut out = Vec::with_capacity(expected);
+        let mut out = Vec::with_capacity(expected.min(cur.remaining().saturating_mul(1100)));
         for (b, &size) in sizes.iter().enumerate() {
             let size = usize::try_from(size).map_err(|_| "truncated block".to_string())?;
             let block = cur
@@ -127,6 +127,13 @@ impl Encoding {
                 Compressor::Zlib => {
                     miniz_oxide::inflate::decompress_to_vec_zlib_with_limit(block, limit)
                         .map_err(|e| format!("bad zlib data in block {b} ({:?})", e.status))?
+                }
+                // LZ4 expands at most 255:1, and its output is allocated whole up front.
+                Compressor::Lz4 if limit > block.len().saturating_mul(255).saturating_add(16) => {
+                    return Err(format!(
+                        "LZ4 block {b} of {} bytes cannot hold {limit} bytes",
+                        block.len()
+                    ));
                 }
                 Compressor::Lz4 => lz4_flex::block::decompress(block, limit)
                     .map_err(|e| format!("bad LZ4 data in block {b} ({e})"))?,

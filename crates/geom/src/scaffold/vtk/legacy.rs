@@ -558,6 +558,9 @@ fn skip_metadata(cur: &mut Cursor<'_>, components: usize) {
         }
         if text.len() >= 15 && text[..15].eq_ignore_ascii_case(b"COMPONENT_NAMES") {
             for _ in 0..components {
+                if cur.remaining() == 0 {
+                    break;
+                }
                 cur.skip_line();
             }
         }

@@ -221,7 +221,8 @@ def main():
             "cells_vtk": vtk_cells.tolist(),
             "cells_gmsh": gmsh_cells.tolist(),
             "vtk_cell_type": VTK_TYPE[kind],
-            "point_data": {"weight": weight.tolist(), "wall thickness": thickness.tolist()},
+            "point_data": {"weight": weight.tolist(), "wall thickness": thickness.tolist(),
+                           "thickness": thickness.tolist()},
         }
         quadratic = kind not in ("tet4", "hex8")
         files = {}
@@ -276,7 +277,8 @@ def main():
 
         # meshio: legacy with FIELD point data, and .vtu.
         m = meshio.Mesh(xyz, [(MESHIO_TYPE[kind], vtk_cells)],
-                        point_data={"weight": weight, "displacement": xyz * 2},
+                        point_data={"weight": weight, "thickness": thickness,
+                                    "displacement": xyz * 2},
                         cell_data={"region": [np.arange(len(vtk_cells), dtype=np.int32) % 2]})
         mio = [("meshio_ascii.vtk", dict(binary=False)), ("meshio_binary.vtk", dict(binary=True)),
                ("meshio.vtu", dict())]
@@ -291,7 +293,7 @@ def main():
                 meshio.vtk.write(path, m, **kw)
             else:
                 meshio.vtu.write(path, m, **kw)
-            add(name, "meshio", f"{name.rsplit('.', 1)[1]} {kw}", ["weight"])
+            add(name, "meshio", f"{name.rsplit('.', 1)[1]} {kw}", ["weight", "thickness"])
         reference["files"].update(files)
     with open(os.path.join(out, "reference.json"), "w") as f:
         json.dump(reference, f, indent=1, sort_keys=True)
