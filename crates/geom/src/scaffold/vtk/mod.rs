@@ -1,6 +1,6 @@
-//! VTK unstructured grids: legacy `.vtk` ([`legacy`]) and XML `.vtu` ([`vtu`], its binary
-//! blocks in [`blocks`]), as VTK 9, PyVista and meshio write them; what both share is here:
-//! cell types, VTK's local node order, and type names.
+//! VTK unstructured grids: legacy `.vtk` ([`legacy`], arrays read past in [`legacy_arrays`])
+//! and XML `.vtu` ([`vtu`], its binary blocks in [`blocks`]), as VTK 9, PyVista and meshio
+//! write them; what both share is here: cell types, VTK's local node order, type names.
 //!
 //! Invariants:
 //! - Points keep their file order; node tags are 0-based point indices and element tags
@@ -15,6 +15,7 @@
 
 mod blocks;
 mod legacy;
+mod legacy_arrays;
 mod vtu;
 
 pub(super) use legacy::read_legacy;
