@@ -32,6 +32,7 @@ mod tiling;
 mod tiling_cache;
 mod volume_fraction;
 mod voxel_cells;
+mod vtk_scaffolds;
 mod watch;
 
 /// Cargo no longer discovers `tests/*.rs` (`autotests = false`), so a file not declared

@@ -24,6 +24,7 @@ mod scaffold_element;
 mod scaffold_files;
 mod scaffold_grid;
 mod scaffold_read_errors;
+mod scaffold_vtk_tools;
 mod sdf_bounds;
 mod sdf_errors;
 mod sdf_paper;

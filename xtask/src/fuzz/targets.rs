@@ -93,7 +93,7 @@ pub const TARGETS: &[Target] = &[
     },
     Target {
         name: "scaffold-vtu",
-        about: "scaffold::read_scaffold of a .vtu (ASCII, base64, zlib, appended), then check and facets",
+        about: "scaffold::read_scaffold of a .vtu (ASCII, base64, zlib, LZ4, appended), then check and facets",
         run: |b, _| scaffold_target(b, "vtu"),
         extensions: &["vtu"],
         hidden: false,
