@@ -36,14 +36,21 @@ fn err(at: usize, what: impl Into<String>) -> ZipError {
     }
 }
 
+// `at` may be anything a corrupt archive says: the ends are added with overflow checked.
 fn u16_at(b: &[u8], at: usize) -> Option<u16> {
-    Some(u16::from_le_bytes(b.get(at..at + 2)?.try_into().ok()?))
+    Some(u16::from_le_bytes(
+        b.get(at..at.checked_add(2)?)?.try_into().ok()?,
+    ))
 }
 fn u32_at(b: &[u8], at: usize) -> Option<u32> {
-    Some(u32::from_le_bytes(b.get(at..at + 4)?.try_into().ok()?))
+    Some(u32::from_le_bytes(
+        b.get(at..at.checked_add(4)?)?.try_into().ok()?,
+    ))
 }
 fn u64_at(b: &[u8], at: usize) -> Option<u64> {
-    Some(u64::from_le_bytes(b.get(at..at + 8)?.try_into().ok()?))
+    Some(u64::from_le_bytes(
+        b.get(at..at.checked_add(8)?)?.try_into().ok()?,
+    ))
 }
 
 /// The parts of the archive `bytes`, in directory order.
@@ -174,11 +181,7 @@ pub(super) fn content(bytes: &[u8], part: &Part) -> Result<Vec<u8>, ZipError> {
             ));
         }
     };
-    let mut crc = crate::mesh_io::crc32(&content);
-    if content.len() as u64 != part.size {
-        crc = !part.crc;
-    }
-    if crc != part.crc {
+    if content.len() as u64 != part.size || crate::mesh_io::crc32(&content) != part.crc {
         return Err(err(
             data_start,
             format!("part {} is corrupt (size or CRC-32 differ)", part.name),
