@@ -47,6 +47,10 @@ fn bytes_per_triangle(format: Format, encoding: Encoding) -> f64 {
         Format::Obj | Format::Off => 45.0,
         Format::Vtk if ascii => 45.0,
         Format::Vtk => 22.0,
+        // Points (12 bytes a vertex), three Int64 indices, an offset and a type.
+        Format::Vtu => 39.0,
+        // The deflated XML, about a quarter of its 60 bytes a triangle.
+        Format::ThreeMf => 20.0,
     }
 }
 

@@ -811,9 +811,11 @@ impl<'a> Builder<'a> {
                 continue;
             };
             let encoding = write.encoding;
+            let stamp = &write.stamp;
             let (send, receive) = mpsc::sync_channel::<Arc<MeshChunk>>(CHUNKS_IN_FLIGHT);
             let thread = scope.spawn(move || {
-                let mut stream = StlStream::begin(encoding, Workers::Caller, &mut file).ok()?;
+                let mut stream =
+                    StlStream::begin(encoding, stamp, Workers::Caller, &mut file).ok()?;
                 for chunk in receive {
                     stream.push(&chunk, &mut file).ok()?;
                 }

@@ -15,6 +15,7 @@ mod crystal;
 mod determinism;
 mod examples;
 mod far_from_origin;
+mod formats;
 mod golden;
 mod incremental;
 mod islands;

@@ -284,7 +284,7 @@ fn output_format(path: &Path) -> Result<Format, Failure> {
     Format::from_name(&ext).ok_or_else(|| {
         usage(format_args!(
             "cannot tell the mesh format of `{}` from its extension; use .stl, .ply, .obj, \
-             .off or .vtk",
+             .off, .vtk, .vtu or .3mf",
             path.display()
         ))
     })

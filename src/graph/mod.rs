@@ -26,7 +26,13 @@ use crate::stages::sizing::{DensityStage, Over};
 use crate::stages::symmetric::{Combination, CombineStage, ConstrainStage, FitStage, SampleStage};
 use crate::stages::tile::TileStage;
 use crate::stages::voxels::VoxelCellStage;
-use crate::stages::write::WriteStage;
+use crate::stages::write::{self, WriteStage};
+use latticebuild_geom::mesh_io::Units;
+
+/// A parameter of a written file's stamp.
+fn p(name: &str, value: impl Into<String>) -> (String, String) {
+    (name.to_string(), value.into())
+}
 
 /// Index of a node in [`Graph::nodes`].
 pub type NodeId = usize;
@@ -220,14 +226,33 @@ impl Graph {
             if let Some(part) = &output.within {
                 inputs.push(compiler.file(&mut graph, part));
             }
-            let stage = Stage::contour(output, fitted);
+            let mut stage = Stage::contour(output, fitted);
+            if let Stage::Contour(contour) = &mut stage {
+                contour.units = Units::from_name(&manifest.units).unwrap_or(Units::Millimeter);
+            }
             if let Stage::Contour(contour) = &stage
                 && let Some(density) = contour.density()
             {
                 inputs.push(graph.density(&output.cell, density, cell_node));
             }
             let contour = graph.push(format!("contour:{name}"), stage, inputs);
-            let write = WriteStage::new(output, manifest.report);
+            let parameters = vec![
+                p("cell", &output.cell),
+                p("solid", format!("{:?}", output.solid)),
+                p("sizing", format!("{:?}", output.sizing)),
+                p(
+                    "domain",
+                    format!("{:?} {:?}", output.domain_min, output.domain_max),
+                ),
+                p("cell_size", format!("{:?}", output.cell_size)),
+                p("samples", format!("{:?}", output.samples)),
+                p(
+                    "within",
+                    output.within.as_ref().map_or("", |f| f.given.as_str()),
+                ),
+            ];
+            let stamp = write::stamp(name, &manifest.units, parameters);
+            let write = WriteStage::new(output, manifest.report, stamp);
             graph.finish_output(name, &output.islands, contour, write);
         }
         // An SDF output: `sdf` reading a `file:` node per mesh of its program, then `write`.
@@ -244,6 +269,14 @@ impl Graph {
                 // A program's box is its solid's or the user's, not the lattice's: the void
                 // round a part filled by a program (a ball of gyroid) is not a pore.
                 pore_box: None,
+                stamp: write::stamp(
+                    name,
+                    &manifest.units,
+                    vec![
+                        p("bounds", format!("{:?}", output.bounds)),
+                        p("resolution", format!("{:?}", output.resolution)),
+                    ],
+                ),
             };
             graph.finish_output(name, &output.islands, solid, write);
         }
@@ -270,6 +303,17 @@ impl Graph {
                 stem: output.stem.clone(),
                 report: manifest.report,
                 pore_box: None,
+                stamp: write::stamp(
+                    name,
+                    &manifest.units,
+                    vec![
+                        p("scaffold", &output.scaffold),
+                        p("cell", &output.cell),
+                        p("solid", format!("{:?}", output.solid)),
+                        p("sizing", format!("{:?}", output.sizing)),
+                        p("resolution", output.resolution.to_string()),
+                    ],
+                ),
             };
             graph.finish_output(name, &output.islands, tiled, write);
         }

@@ -19,6 +19,7 @@ use latticebuild_geom::contour2d::{
 use latticebuild_geom::element::{Element3, contour_clipped, contour_cube_band};
 use latticebuild_geom::field::{Band, Grid, ScalarField, Solid, SolidField, SolidSampler};
 use latticebuild_geom::mesh::Mesh;
+use latticebuild_geom::mesh_io::Units;
 use latticebuild_geom::symmetric::{Group, ReferenceElement};
 use latticebuild_geom::within::WithinSampler;
 
@@ -53,6 +54,8 @@ pub struct ContourStage {
     pub samples: [usize; 3],
     /// `within`: the part file's name (its bytes are the second input), and the skin.
     pub within: Option<String>,
+    /// The model's unit, which a 3MF part is converted to (set by the graph; `mm` here).
+    pub units: Units,
     pub skin: Option<f64>,
 }
 
@@ -98,6 +101,7 @@ impl ContourStage {
             sizing: output.sizing.clone(),
             samples: output.samples,
             within: output.within.as_ref().map(|f| f.given.clone()),
+            units: Units::Millimeter,
             skin: output.skin,
         }
     }
@@ -109,7 +113,8 @@ impl ContourStage {
             Solid::Shell { thickness } => ("shell", 0.0, thickness),
             Solid::EccentricShell { offset, thickness } => ("eccentric_shell", offset, thickness),
         };
-        key.param("fitted", self.fitted.is_some())
+        let key = key
+            .param("fitted", self.fitted.is_some())
             .param("over_element", self.over_element)
             .param("planar_domain", self.planar_domain)
             .param("domain.min", vec3(self.domain_min))
@@ -132,7 +137,17 @@ impl ContourStage {
                     .map_or(String::new(), |e| e.to_string_lossy().to_lowercase()),
             )
             .param("skin", self.skin.unwrap_or(0.0))
-            .param("sizing", sizing_param(&self.sizing))
+            .param("sizing", sizing_param(&self.sizing));
+        // Only a 3MF part has a unit to convert (other keys stay as they were).
+        let three_mf = self.within.as_deref().is_some_and(|w| {
+            std::path::Path::new(w)
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("3mf"))
+        });
+        match three_mf {
+            true => key.param("within_units", self.units.name()),
+            false => key,
+        }
     }
 
     /// Whether the stage reads a density table (its last input): to solve a volume fraction.
@@ -264,7 +279,7 @@ impl ContourStage {
                 (Some(given), Some(bytes), _) => {
                     progress.phase("preparing the part");
                     let band = WithinSampler::band_for(&model, self.skin);
-                    let sdf = part_sdf(given, bytes, band)?;
+                    let sdf = part_sdf(given, bytes, band, self.units)?;
                     if let Some(band) = self.solid.band() {
                         // Contoured from |f − c| − w/2 below: its wall is measured on f apart.
                         progress.phase("measuring the shell's wall");

@@ -11,6 +11,7 @@
 //!   surface may be a neighbouring copy's and a strut's end caps meet the next cell's.
 
 use latticebuild_geom::field::ScalarField;
+use latticebuild_geom::mesh_io::Units;
 use latticebuild_geom::mesh_read::{self, Format, TriangleSoup};
 use latticebuild_geom::mesh_sdf::{MeshSdf, Mode, PeriodicMeshSdf, SdfOptions};
 
@@ -34,10 +35,19 @@ fn format_of(given: &str) -> Result<Format, StageError> {
 }
 
 /// Reads the soup of a mesh file's bytes, in the format its content shows (its extension
-/// when the content does not tell); errors name the file.
+/// when the content does not tell); errors name the file. A 3MF's coordinates are taken as
+/// written: a mesh cell is in cell units, whatever unit the package names.
 pub fn read_soup(given: &str, bytes: &[u8]) -> Result<TriangleSoup, StageError> {
     let extension = format_of(given)?.extension();
     mesh_read::read_auto(bytes, Some(extension))
+        .map_err(|e| StageError::geometry_of(format!("cannot read `{given}`"), e))
+}
+
+/// [`read_soup`] in the model's `units`: a 3MF package's coordinates are converted from its
+/// unit (the other formats have none).
+pub fn read_soup_in(given: &str, bytes: &[u8], units: Units) -> Result<TriangleSoup, StageError> {
+    let extension = format_of(given)?.extension();
+    mesh_read::read_auto_in(bytes, Some(extension), units)
         .map_err(|e| StageError::geometry_of(format!("cannot read `{given}`"), e))
 }
 
@@ -180,10 +190,10 @@ pub fn mesh_cell_field(payload: &[u8]) -> Result<Box<dyn ScalarField>, StageErro
     Ok(Box::new(sdf))
 }
 
-/// The part of `within`: its signed distance in model units, exact within `band` of the
-/// surface and clamped beyond (the sign stays exact everywhere).
-pub fn part_sdf(given: &str, bytes: &[u8], band: f64) -> Result<MeshSdf, StageError> {
-    let soup = read_soup(given, bytes)?;
+/// The part of `within`: its signed distance in model units (`units`), exact within `band`
+/// of the surface and clamped beyond (the sign stays exact everywhere).
+pub fn part_sdf(given: &str, bytes: &[u8], band: f64, units: Units) -> Result<MeshSdf, StageError> {
+    let soup = read_soup_in(given, bytes, units)?;
     let options = SdfOptions {
         band: Some(band),
         ..SdfOptions::default()

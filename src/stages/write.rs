@@ -5,13 +5,17 @@
 //! A chunked input found corrupt while being read is [`WriteError::CorruptInput`]: the files
 //! being written are discarded (the sink renames only whole files) and the builder reruns the
 //! node that made the mesh.
+//!
+//! Every file carries the stage's [`Stamp`]: the tool's version and the model's unit in its
+//! header (STL, PLY, OBJ, VTK, VTU), the output's name and parameters too in a 3MF, and an SVG
+//! drawing gets its physical `width` and `height` in that unit. The stamp is in the key.
 
 use std::io::{self, Seek, Write};
 
 use rayon::prelude::*;
 
 use latticebuild_geom::contour2d::PlanarRegion;
-use latticebuild_geom::mesh_io::{self, ChunkSource, Encoding, Format};
+use latticebuild_geom::mesh_io::{self, ChunkSource, Encoding, Format, Stamp, Units};
 
 use super::StageError;
 use super::artifact::{MeshArtifact, WrittenFile, WrittenOutput};
@@ -20,8 +24,8 @@ use super::measure::{self, Measures, ReportLevel};
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::Output;
 
-/// 2: the payload holds the output's [`Measures`].
-pub const VERSION: u32 = 2;
+/// 2: the payload holds the output's [`Measures`]. 3: files carry a [`Stamp`].
+pub const VERSION: u32 = 3;
 
 /// Where the write stage's files go. The CLI's implementation writes each file to a temporary
 /// name and renames it into place, so a file is whole or absent.
@@ -85,10 +89,27 @@ pub struct WriteStage {
     /// round the part is not a pore (a tiled part, a fill within a mesh, an element, an SDF
     /// program's solid).
     pub pore_box: Option<[[f64; 3]; 2]>,
+    /// What the files say about themselves ([`stamp`]).
+    pub stamp: Stamp,
+}
+
+/// The stamp of output `name` of a manifest whose lengths are in `units` (its `units` key,
+/// which the manifest has checked), made with `parameters`.
+pub fn stamp(name: &str, units: &str, parameters: Vec<(String, String)>) -> Stamp {
+    Stamp {
+        generator: format!("latticebuild {}", env!("CARGO_PKG_VERSION")),
+        units: Some(Units::from_name(units).expect("the manifest checks `units`")),
+        title: name.to_string(),
+        // A parameter left unset (`within` of an output with no part) says nothing.
+        parameters: parameters
+            .into_iter()
+            .filter(|(_, v)| !v.is_empty())
+            .collect(),
+    }
 }
 
 impl WriteStage {
-    pub fn new(output: &Output, report: ReportLevel) -> WriteStage {
+    pub fn new(output: &Output, report: ReportLevel, stamp: Stamp) -> WriteStage {
         let boxed = !output.over_element && !output.planar_domain && output.within.is_none();
         WriteStage {
             formats: output.formats.clone(),
@@ -96,6 +117,7 @@ impl WriteStage {
             stem: output.stem.clone(),
             report,
             pore_box: boxed.then_some([output.domain_min, output.domain_max]),
+            stamp,
         }
     }
 
@@ -114,7 +136,17 @@ impl WriteStage {
             .iter()
             .map(|f| Param::Str(f.name().to_string()))
             .collect();
+        let stamp = &self.stamp;
+        let parameters = stamp
+            .parameters
+            .iter()
+            .map(|(k, v)| Param::Str(format!("{k}={v}")))
+            .collect();
         key.param("formats", Param::List(formats))
+            .param("generator", stamp.generator.as_str())
+            .param("units", stamp.units.map_or("", Units::name))
+            .param("title", stamp.title.as_str())
+            .param("parameters", Param::List(parameters))
             .param("ascii", self.encoding == Encoding::Ascii)
             .param("path", self.stem.as_str())
             .param("report", self.report.name())
@@ -139,12 +171,20 @@ impl WriteStage {
                 let written = match ready {
                     Some(file) => file.commit(),
                     None => sink.write_file(&path, &mut |w| match input {
-                        MeshInput::Whole(artifact) => {
-                            mesh_io::write_mesh(&artifact.mesh, format, self.encoding, w)
-                        }
-                        MeshInput::Chunked { chunks, .. } => {
-                            mesh_io::write_chunked(chunks, format, self.encoding, w)
-                        }
+                        MeshInput::Whole(artifact) => mesh_io::write_mesh_stamped(
+                            &artifact.mesh,
+                            format,
+                            self.encoding,
+                            &self.stamp,
+                            w,
+                        ),
+                        MeshInput::Chunked { chunks, .. } => mesh_io::write_chunked_stamped(
+                            chunks,
+                            format,
+                            self.encoding,
+                            &self.stamp,
+                            w,
+                        ),
                     }),
                 };
                 let (bytes, modified_ns) = written.map_err(|e| {
@@ -237,9 +277,20 @@ impl WriteStage {
                 boundary: planar.boundary.clone(),
             };
             let (bytes, modified_ns) = sink
-                .write_file(&path, &mut |w| match &planar.svg {
-                    Some(svg) => w.write_all(svg.as_bytes()),
-                    None => mesh_io::write_svg(&region, &planar.element, w),
+                .write_file(&path, &mut |w| {
+                    let svg = match &planar.svg {
+                        Some(svg) => svg.clone(),
+                        None => {
+                            let mut svg = Vec::new();
+                            mesh_io::write_svg(&region, &planar.element, &mut svg)?;
+                            String::from_utf8_lossy(&svg).into_owned()
+                        }
+                    };
+                    let svg = match self.stamp.units {
+                        Some(units) => mesh_io::with_physical_size(&svg, units),
+                        None => svg,
+                    };
+                    w.write_all(svg.as_bytes())
                 })
                 .map_err(|e| {
                     WriteError::Failed(StageError::Output {

@@ -16,7 +16,9 @@ use super::super::model::{Cell, CellSource, InputFile, MeshCell, MeshSampling, O
 use super::{Checker, Fields, Value, list};
 
 /// File extensions of the mesh readers, lower case.
-pub(super) const MESH_EXTENSIONS: [&str; 4] = ["stl", "obj", "ply", "off"];
+pub(super) const MESH_EXTENSIONS: [&str; 5] = ["stl", "obj", "ply", "off", "3mf"];
+/// SDF programs read meshes as written, and a 3MF's coordinates have a unit: not read there.
+const PROGRAM_MESH_EXTENSIONS: [&str; 4] = ["stl", "obj", "ply", "off"];
 
 /// A kind of input file: the extensions its readers know, its noun in messages, and a help
 /// line for a file they don't.
@@ -28,6 +30,12 @@ pub(super) struct FileKind {
 
 pub(super) const MESH_FILES: FileKind = FileKind {
     extensions: &MESH_EXTENSIONS,
+    noun: "mesh",
+    help: "convert the mesh to STL, OBJ, PLY, OFF or 3MF",
+};
+
+pub(super) const PROGRAM_MESH_FILES: FileKind = FileKind {
+    extensions: &PROGRAM_MESH_EXTENSIONS,
     noun: "mesh",
     help: "convert the mesh to STL, OBJ, PLY or OFF",
 };

@@ -25,7 +25,7 @@ use toml::de::DeValue;
 use super::super::expression;
 use super::super::model::{InputFile, ProgramOutput, ProgramResolution, voxel_samples};
 use super::keys::{DOMAIN_KEYS, OUTPUT_KEYS};
-use super::meshes::MESH_FILES;
+use super::meshes::PROGRAM_MESH_FILES;
 use super::{Checker, Fields, Key, Value};
 
 /// Keys of cell outputs, each with why it does not apply to an SDF output and what to do.
@@ -262,7 +262,7 @@ impl Checker<'_, '_, '_> {
             // The path is the word after `file`.
             let span = at(word_span(*n).unwrap_or(0..text.len()));
             let what = format!("`file {given}` in `{key}`");
-            let Some(file) = self.input_file(&what, given, span, &MESH_FILES) else {
+            let Some(file) = self.input_file(&what, given, span, &PROGRAM_MESH_FILES) else {
                 ok = false;
                 continue;
             };

@@ -5,7 +5,7 @@
 //!   format is a header followed by sections of per-record bytes, and a section written chunk
 //!   by chunk is the same concatenation. Counts in headers come from [`ChunkSource::totals`];
 //!   the chunks must add up to them, or the call fails.
-//! - Indexed formats (PLY, OBJ, OFF, VTK) read the chunks twice, vertices then triangles
+//! - Indexed formats (all but STL) read the chunks twice, vertices then triangles
 //!   ([`Pass::Vertices`], [`Pass::Triangles`]); STL reads them once ([`Pass::Facets`]), taking
 //!   positions from each chunk ([`MeshChunk::position`]).
 //! - A chunk is checked before any of its bytes are written — finite coordinates, indices in
@@ -14,8 +14,10 @@
 //!   chunk's bytes. Either way a bad chunk fails the call and the caller discards the output.
 
 use super::encode::Workers;
+use super::stamp::Stamp;
 use super::{
-    Encoding, Format, check_finite, check_finite_by, check_indices, obj, off, ply, stl, vtk,
+    Encoding, Format, check_finite, check_finite_by, check_indices, obj, off, ply, stl, threemf,
+    vtk, vtu,
 };
 use crate::mesh::MeshChunk;
 use std::io::{self, Seek, SeekFrom, Write};
@@ -75,22 +77,34 @@ pub fn write_chunked(
     encoding: Encoding,
     out: &mut dyn Write,
 ) -> io::Result<()> {
+    write_chunked_stamped(source, format, encoding, &Stamp::default(), out)
+}
+
+/// [`write_chunked`] with the headers and metadata of `stamp` (see
+/// [`super::write_mesh_stamped`]).
+pub fn write_chunked_stamped(
+    source: &dyn ChunkSource,
+    format: Format,
+    encoding: Encoding,
+    stamp: &Stamp,
+    out: &mut dyn Write,
+) -> io::Result<()> {
     let (nv, nt) = source.totals();
     match format {
         Format::Stl => {
-            stl::header(nt, encoding, out)?;
+            stl::header(nt, encoding, stamp, out)?;
             facets(source, nt, &mut |chunk, done| {
                 stl_facets(chunk, done, encoding, Workers::Pool, out)
             })?;
-            stl::footer(encoding, out)?;
+            stl::footer(encoding, stamp, out)?;
         }
         Format::Ply => {
-            ply::header(nv, nt, encoding, out)?;
+            ply::header(nv, nt, encoding, stamp, out)?;
             vertices(source, nv, &mut |v| ply::vertices(v, encoding, out))?;
             triangles(source, nv, nt, &mut |t| ply::faces(t, encoding, out))?;
         }
         Format::Obj => {
-            obj::header(nv, nt, out)?;
+            obj::header(nv, nt, stamp, out)?;
             vertices(source, nv, &mut |v| obj::vertices(v, out))?;
             triangles(source, nv, nt, &mut |t| obj::faces(t, out))?;
         }
@@ -100,11 +114,25 @@ pub fn write_chunked(
             triangles(source, nv, nt, &mut |t| off::faces(t, out))?;
         }
         Format::Vtk => {
-            vtk::header(nv, nt, encoding, out)?;
+            vtk::header(nv, nt, encoding, stamp, out)?;
             vertices(source, nv, &mut |v| vtk::points(v, encoding, out))?;
             vtk::polygons_header(nt, encoding, out)?;
             triangles(source, nv, nt, &mut |t| vtk::polygons(t, encoding, out))?;
             vtk::end(encoding, out)?;
+        }
+        Format::Vtu => {
+            vtu::header(nv, nt, stamp, out)?;
+            vertices(source, nv, &mut |v| vtu::points(v, out))?;
+            vtu::connectivity_header(nt, out)?;
+            triangles(source, nv, nt, &mut |t| vtu::connectivity(t, out))?;
+            vtu::tail(nt, out)?;
+        }
+        Format::ThreeMf => {
+            let mut package = threemf::Package::begin(nv, nt, stamp, out)?;
+            vertices(source, nv, &mut |v| threemf::vertices(v, &mut package))?;
+            package.between()?;
+            triangles(source, nv, nt, &mut |t| threemf::triangles(t, &mut package))?;
+            package.finish()?;
         }
     }
     out.flush()
@@ -158,6 +186,7 @@ fn stl_facets(
 #[derive(Debug)]
 pub struct StlStream {
     encoding: Encoding,
+    stamp: Stamp,
     workers: Workers,
     /// Triangles and vertices written so far.
     triangles: u64,
@@ -165,15 +194,17 @@ pub struct StlStream {
 }
 
 impl StlStream {
-    /// Writes the header; `workers` encode the facets.
+    /// Writes the header (with `stamp`'s text); `workers` encode the facets.
     pub fn begin(
         encoding: Encoding,
+        stamp: &Stamp,
         workers: Workers,
         out: &mut dyn Write,
     ) -> io::Result<StlStream> {
-        stl::header(0, encoding, out)?;
+        stl::header(0, encoding, stamp, out)?;
         Ok(StlStream {
             encoding,
+            stamp: stamp.clone(),
             workers,
             triangles: 0,
             vertices: 0,
@@ -190,11 +221,11 @@ impl StlStream {
 
     /// Ends the file: the footer, and the binary facet count at its place in the header.
     pub fn finish<W: Write + Seek>(self, out: &mut W) -> io::Result<()> {
-        stl::footer(self.encoding, out)?;
+        stl::footer(self.encoding, &self.stamp, out)?;
         if self.encoding == Encoding::Binary {
             let end = out.stream_position()?;
             let mut header = Vec::with_capacity(84);
-            stl::header(self.triangles, self.encoding, &mut header)?;
+            stl::header(self.triangles, self.encoding, &self.stamp, &mut header)?;
             out.seek(SeekFrom::Start(80))?;
             out.write_all(&header[80..])?;
             out.seek(SeekFrom::Start(end))?;
@@ -379,7 +410,7 @@ fn count_mismatch(what: &str, declared: u64, found: u64) -> io::Error {
 mod tests {
     use super::*;
     use crate::mesh::Mesh;
-    use crate::mesh_io::write_mesh;
+    use crate::mesh_io::write_mesh_stamped;
 
     /// A closed mesh of many tetrahedra, some vertices shared far apart in triangle order
     /// (so chunks borrow), plus an unreferenced vertex, with awkward coordinates.
@@ -413,6 +444,16 @@ mod tests {
         mesh
     }
 
+    fn stamp() -> Stamp {
+        Stamp {
+            generator: "latticebuild 9.8.7".into(),
+            units: Some(crate::mesh_io::Units::Inch),
+            title: "part <1> & \"2\"".into(),
+            parameters: vec![("cell".into(), "gyroid".into())],
+        }
+    }
+
+    /// Also with a stamp, and for 3MF, whose zip deflates the XML as it comes.
     #[test]
     fn every_format_and_encoding_is_byte_identical_to_the_whole_mesh() {
         let mesh = mesh();
@@ -420,11 +461,17 @@ mod tests {
             let chunks = MeshChunk::split(&mesh, per);
             assert!(per > 1000 || chunks.iter().any(|c| !c.borrowed.is_empty()));
             for format in Format::ALL {
-                for encoding in [Encoding::Binary, Encoding::Ascii] {
+                for (encoding, stamp) in [
+                    (Encoding::Binary, Stamp::default()),
+                    (Encoding::Ascii, Stamp::default()),
+                    (Encoding::Binary, stamp()),
+                    (Encoding::Ascii, stamp()),
+                ] {
                     let mut whole = Vec::new();
-                    write_mesh(&mesh, format, encoding, &mut whole).expect("whole");
+                    write_mesh_stamped(&mesh, format, encoding, &stamp, &mut whole).expect("whole");
                     let mut chunked = Vec::new();
-                    write_chunked(&chunks, format, encoding, &mut chunked).expect("chunked");
+                    write_chunked_stamped(&chunks, format, encoding, &stamp, &mut chunked)
+                        .expect("chunked");
                     assert!(
                         whole == chunked,
                         "{format:?} {encoding:?}, {per} per chunk: {} vs {} bytes",
@@ -483,7 +530,7 @@ mod tests {
         let mesh = mesh();
         for encoding in [Encoding::Binary, Encoding::Ascii] {
             let mut whole = Vec::new();
-            write_mesh(&mesh, Format::Stl, encoding, &mut whole).expect("whole");
+            write_mesh_stamped(&mesh, Format::Stl, encoding, &stamp(), &mut whole).expect("whole");
             for (per, workers) in [
                 (1, Workers::Caller),
                 (7, Workers::Pool),
@@ -493,7 +540,8 @@ mod tests {
             ] {
                 let chunks = MeshChunk::split(&mesh, per);
                 let mut out = io::Cursor::new(Vec::new());
-                let mut stream = StlStream::begin(encoding, workers, &mut out).expect("begin");
+                let mut stream =
+                    StlStream::begin(encoding, &stamp(), workers, &mut out).expect("begin");
                 for chunk in &chunks {
                     stream.push(chunk, &mut out).expect("push");
                 }
@@ -512,14 +560,24 @@ mod tests {
     fn streamed_stl_refuses_bad_chunks() {
         let chunks = MeshChunk::split(&mesh(), 50);
         let mut out = io::Cursor::new(Vec::new());
-        let mut stream =
-            StlStream::begin(Encoding::Binary, Workers::Caller, &mut out).expect("begin");
+        let mut stream = StlStream::begin(
+            Encoding::Binary,
+            &Stamp::default(),
+            Workers::Caller,
+            &mut out,
+        )
+        .expect("begin");
         assert!(
             stream.push(&chunks[1], &mut out).is_err(),
             "skipped chunk 0"
         );
-        let mut stream =
-            StlStream::begin(Encoding::Binary, Workers::Caller, &mut out).expect("begin");
+        let mut stream = StlStream::begin(
+            Encoding::Binary,
+            &Stamp::default(),
+            Workers::Caller,
+            &mut out,
+        )
+        .expect("begin");
         let borrows = chunks
             .iter()
             .position(|c| !c.borrowed.is_empty())

@@ -1,4 +1,5 @@
-//! Mesh writers: STL, PLY, OBJ, OFF and VTK legacy polydata, streamed to any `io::Write`.
+//! Mesh writers: STL, PLY, OBJ, OFF, VTK legacy polydata, VTK XML unstructured grid (`vtu`) and
+//! 3MF, streamed to any `io::Write`.
 //!
 //! Invariant: writers never open files; the caller hands them a buffered writer (the CLI
 //! writes to a temporary file and renames it into place).
@@ -9,7 +10,9 @@
 //!   Format limits (32-bit counts and indices) are checked the same way.
 //! - Text and binary encodings hold the same values: text prints each `f32` with the shortest
 //!   decimal that parses back to it bit for bit.
-//! - Every vertex is written by the indexed formats (PLY, OBJ, OFF, VTK), so indices in the file
+//! - A [`Stamp`] (generator and version, unit, title, parameters) changes headers, comments
+//!   and metadata only; [`write_mesh`] writes the anonymous [`Stamp::default`].
+//! - Every vertex is written by the indexed formats (all but STL), so indices in the file
 //!   are the mesh's own (plus one for OBJ). STL has no indices and repeats positions per facet.
 //! - [`write_chunked`] writes a mesh held as [`crate::mesh::MeshChunk`]s, a chunk at a time,
 //!   with exactly the bytes `write_mesh` writes for the concatenated mesh. Chunks are checked
@@ -24,33 +27,52 @@ mod encode;
 mod obj;
 mod off;
 mod ply;
+mod stamp;
 mod stl;
 pub mod svg;
+pub mod threemf;
 mod vtk;
+mod vtu;
+mod zip;
 
 use crate::mesh::Mesh;
 use rayon::prelude::*;
 use std::io::{self, Write};
 
-pub use chunked::{ChunkSource, Pass, StlStream, write_chunked};
+pub use chunked::{ChunkSource, Pass, StlStream, write_chunked, write_chunked_stamped};
 pub use encode::Workers;
-pub use svg::{scaffold_svg, write_svg};
+pub use stamp::{Stamp, Units};
+pub use svg::{scaffold_svg, with_physical_size, write_svg};
 
-/// Writes `mesh` to `out` in `format`. `encoding` chooses binary or text for STL, PLY and VTK
-/// and is ignored by OBJ and OFF, which are always text.
+/// Writes `mesh` to `out` in `format`, anonymously ([`Stamp::default`]). `encoding` chooses
+/// binary or text for STL, PLY and VTK and is ignored by the others (OBJ and OFF are always
+/// text, VTU and 3MF always binary).
 pub fn write_mesh(
     mesh: &Mesh,
     format: Format,
     encoding: Encoding,
     out: &mut dyn Write,
 ) -> io::Result<()> {
+    write_mesh_stamped(mesh, format, encoding, &Stamp::default(), out)
+}
+
+/// [`write_mesh`] with the headers and metadata of `stamp`.
+pub fn write_mesh_stamped(
+    mesh: &Mesh,
+    format: Format,
+    encoding: Encoding,
+    stamp: &Stamp,
+    out: &mut dyn Write,
+) -> io::Result<()> {
     check_input(mesh)?;
     match format {
-        Format::Stl => stl::write(mesh, encoding, out)?,
-        Format::Ply => ply::write(mesh, encoding, out)?,
-        Format::Obj => obj::write(mesh, out)?,
+        Format::Stl => stl::write(mesh, encoding, stamp, out)?,
+        Format::Ply => ply::write(mesh, encoding, stamp, out)?,
+        Format::Obj => obj::write(mesh, stamp, out)?,
         Format::Off => off::write(mesh, out)?,
-        Format::Vtk => vtk::write(mesh, encoding, out)?,
+        Format::Vtk => vtk::write(mesh, encoding, stamp, out)?,
+        Format::Vtu => vtu::write(mesh, stamp, out)?,
+        Format::ThreeMf => threemf::write(mesh, stamp, out)?,
     }
     out.flush()
 }
@@ -126,9 +148,12 @@ pub enum Format {
     Obj,
     Off,
     Vtk,
+    Vtu,
+    ThreeMf,
 }
 
-/// Binary or text, for the formats that have both (STL, PLY, VTK). OBJ and OFF are always text.
+/// Binary or text, for the formats that have both (STL, PLY, VTK). OBJ and OFF are always
+/// text, VTU and 3MF always binary.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 pub enum Encoding {
     #[default]
@@ -137,12 +162,14 @@ pub enum Encoding {
 }
 
 impl Format {
-    pub const ALL: [Format; 5] = [
+    pub const ALL: [Format; 7] = [
         Format::Stl,
         Format::Ply,
         Format::Obj,
         Format::Off,
         Format::Vtk,
+        Format::Vtu,
+        Format::ThreeMf,
     ];
 
     /// The manifest name of the format, which is also its file extension.
@@ -153,10 +180,19 @@ impl Format {
             Format::Obj => "obj",
             Format::Off => "off",
             Format::Vtk => "vtk",
+            Format::Vtu => "vtu",
+            Format::ThreeMf => "3mf",
         }
     }
 
     pub fn from_name(name: &str) -> Option<Format> {
         Format::ALL.into_iter().find(|f| f.name() == name)
     }
+}
+
+/// The CRC-32 of `bytes` (zip's), for readers that check a package's parts.
+pub(crate) fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = zip::Crc32::new();
+    crc.update(bytes);
+    crc.value()
 }

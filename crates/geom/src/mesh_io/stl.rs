@@ -1,22 +1,26 @@
 //! STL, binary (default) or ASCII.
 //!
-//! Binary layout (little-endian): an 80-byte header beginning `latticebuild` (never `solid`, so
-//! readers that sniff the first line do not mistake it for ASCII), a `u32` facet count, then per
+//! Binary layout (little-endian): an 80-byte header beginning with the stamp's generator
+//! (`latticebuild 0.1.0 binary STL, units: mm`; never `solid`, so readers that sniff the first
+//! line do not mistake it for ASCII), a `u32` facet count, then per
 //! facet the unit normal, the three vertices (12 `f32`) and a `u16` attribute count of 0: 50
 //! bytes, so a file of `n` facets is `84 + 50 n` bytes.
 //!
 //! STL has no vertex sharing: every facet repeats its three positions. The facet normal is
 //! computed from the `f32` vertices in `f64` and rounded to `f32`; a degenerate facet (zero
 //! area) gets the zero vector, which readers take as "compute it yourself".
+//!
+//! ASCII names its solid by the stamp: `solid latticebuild 0.1.0, units: mm`, and the same
+//! name after `endsolid`.
 
 use super::Encoding;
 use super::encode::{
     Workers, push_f32, push_point, records_per_block, write_blocks_by, write_encoded_by,
 };
+use super::stamp::Stamp;
 use crate::mesh::Mesh;
 use std::io::{self, Write};
 
-const HEADER_TEXT: &[u8] = b"latticebuild binary STL";
 const FACET_BYTES: usize = 50;
 /// Facets whose normals are found together: a batch's square roots and divisions then run
 /// two to an instruction (they were half of the binary writer's time one facet at a time).
@@ -24,8 +28,13 @@ const NORMAL_BATCH: usize = 8;
 /// A generous estimate of one ASCII facet, only used to size blocks.
 const ASCII_FACET_BYTES: usize = 256;
 
-pub(super) fn write(mesh: &Mesh, encoding: Encoding, out: &mut dyn Write) -> io::Result<()> {
-    header(mesh.triangles.len() as u64, encoding, out)?;
+pub(super) fn write(
+    mesh: &Mesh,
+    encoding: Encoding,
+    stamp: &Stamp,
+    out: &mut dyn Write,
+) -> io::Result<()> {
+    header(mesh.triangles.len() as u64, encoding, stamp, out)?;
     // Indices were range-checked by `write_mesh`.
     facets(
         &mesh.triangles,
@@ -34,7 +43,7 @@ pub(super) fn write(mesh: &Mesh, encoding: Encoding, out: &mut dyn Write) -> io:
         Workers::Pool,
         out,
     )?;
-    footer(encoding, out)
+    footer(encoding, stamp, out)
 }
 
 /// `(b − a) × (c − a)`, computed in `f64` from the `f32` corners.
@@ -133,8 +142,27 @@ fn binary_facets(
     }
 }
 
+/// The binary header's text: the stamp's generator, `binary STL` and the unit, cut to 80 bytes
+/// (at a character boundary).
+fn header_text(stamp: &Stamp) -> String {
+    let mut text = format!("{} binary STL", stamp.generator());
+    if let Some(units) = stamp.units {
+        text.push_str(", units: ");
+        text.push_str(units.name());
+    }
+    while text.len() > 80 {
+        text.pop();
+    }
+    text
+}
+
 /// The 84-byte binary header with the facet count, or the ASCII `solid` line.
-pub(super) fn header(nt: u64, encoding: Encoding, out: &mut dyn Write) -> io::Result<()> {
+pub(super) fn header(
+    nt: u64,
+    encoding: Encoding,
+    stamp: &Stamp,
+    out: &mut dyn Write,
+) -> io::Result<()> {
     match encoding {
         Encoding::Binary => {
             let count = u32::try_from(nt).map_err(|_| {
@@ -147,11 +175,12 @@ pub(super) fn header(nt: u64, encoding: Encoding, out: &mut dyn Write) -> io::Re
                 )
             })?;
             let mut header = [0u8; 84];
-            header[..HEADER_TEXT.len()].copy_from_slice(HEADER_TEXT);
+            let text = header_text(stamp);
+            header[..text.len()].copy_from_slice(text.as_bytes());
             header[80..].copy_from_slice(&count.to_le_bytes());
             out.write_all(&header)
         }
-        Encoding::Ascii => out.write_all(b"solid latticebuild\n"),
+        Encoding::Ascii => writeln!(out, "solid {}", stamp.summary()),
     }
 }
 
@@ -206,9 +235,9 @@ pub(super) fn facets<P: Fn(u32) -> [f32; 3] + Sync>(
 }
 
 /// What follows the facets: nothing in binary, the `endsolid` line in ASCII.
-pub(super) fn footer(encoding: Encoding, out: &mut dyn Write) -> io::Result<()> {
+pub(super) fn footer(encoding: Encoding, stamp: &Stamp, out: &mut dyn Write) -> io::Result<()> {
     match encoding {
         Encoding::Binary => Ok(()),
-        Encoding::Ascii => out.write_all(b"endsolid latticebuild\n"),
+        Encoding::Ascii => writeln!(out, "endsolid {}", stamp.summary()),
     }
 }

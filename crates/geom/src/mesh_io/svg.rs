@@ -9,10 +9,14 @@
 //! [`scaffold_svg`] draws a tiled planar region the same way, with the scaffold's element edges
 //! as one faint unfilled `<path>` on top instead of an outline.
 //!
+//! [`with_physical_size`] gives a drawing its size on paper: `width` and `height` are the
+//! viewBox's, in the model's unit (as a CSS length), so one model unit prints as one unit.
+//!
 //! Invariants: the output is a pure function of the input (numbers are printed with a fixed
 //! number of decimals, trailing zeros trimmed and `-0` written `0`); nothing is written when a
 //! coordinate is not finite, which fails with `InvalidInput`.
 
+use super::stamp::Units;
 use crate::contour2d::PlanarRegion;
 use std::fmt::Write as _;
 use std::io::{self, Write};
@@ -135,6 +139,43 @@ fn region_path(svg: &mut String, loops: &[Vec<[f64; 2]>]) {
     );
 }
 
+/// `svg` (a drawing of this module) with `width` and `height` attributes on its `<svg>` tag:
+/// its viewBox's size in `units`. Unchanged when it has them already or no viewBox.
+pub fn with_physical_size(svg: &str, units: Units) -> String {
+    let Some(tag_end) = svg.find('>') else {
+        return svg.to_string();
+    };
+    let tag = &svg[..tag_end];
+    if !tag.starts_with("<svg ") || tag.contains(" width=") {
+        return svg.to_string();
+    }
+    let view_box = tag
+        .split_once("viewBox=\"")
+        .and_then(|(_, rest)| rest.split_once('"'))
+        .map(|(numbers, _)| {
+            numbers
+                .split_ascii_whitespace()
+                .map(str::parse::<f64>)
+                .collect::<Result<Vec<f64>, _>>()
+        });
+    let Some(Ok(numbers)) = view_box else {
+        return svg.to_string();
+    };
+    let [_, _, width, height] = numbers[..] else {
+        return svg.to_string();
+    };
+    let length = |v: f64| {
+        let (value, unit) = units.css_length(v);
+        format!("{}{unit}", num(value))
+    };
+    format!(
+        "<svg width=\"{}\" height=\"{}\"{}",
+        length(width),
+        length(height),
+        &svg["<svg".len()..]
+    )
+}
+
 /// Bounding box of `points`; the reference square `[-½, ½]²` when there are none, so an empty
 /// drawing still has a valid viewBox.
 fn bounds(points: &[&[f64; 2]]) -> ([f64; 2], [f64; 2]) {
@@ -171,7 +212,7 @@ fn num(x: f64) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::num;
+    use super::*;
 
     #[test]
     fn numbers_are_short_and_deterministic() {
@@ -180,5 +221,19 @@ mod tests {
         assert_eq!(num(2.0), "2");
         assert_eq!(num(-1.25), "-1.25");
         assert_eq!(num(1.0 / 3.0), "0.333333");
+    }
+
+    /// The physical size is the viewBox's in the model's unit, given once.
+    #[test]
+    fn physical_size_is_the_view_box_in_model_units() {
+        let svg = "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"-1 -2 30.5 20\">\n</svg>\n";
+        let sized = with_physical_size(svg, Units::Millimeter);
+        assert!(sized.starts_with("<svg width=\"30.5mm\" height=\"20mm\" xmlns="));
+        assert!(sized.ends_with("viewBox=\"-1 -2 30.5 20\">\n</svg>\n"));
+        assert_eq!(with_physical_size(&sized, Units::Inch), sized);
+        let metres = with_physical_size(svg, Units::Meter);
+        assert!(metres.starts_with("<svg width=\"3050cm\" height=\"2000cm\""));
+        let microns = with_physical_size(svg, Units::Micron);
+        assert!(microns.starts_with("<svg width=\"0.0305mm\" height=\"0.02mm\""));
     }
 }

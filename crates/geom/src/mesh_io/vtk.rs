@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! # vtk DataFile Version 3.0
-//! latticebuild mesh
+//! latticebuild mesh (the stamp: latticebuild 0.1.0 mesh, units: mm)
 //! ASCII | BINARY
 //! DATASET POLYDATA
 //! POINTS N float
@@ -16,12 +16,18 @@
 
 use super::Encoding;
 use super::encode::{ByteOrder, write_points, write_polygons};
+use super::stamp::Stamp;
 use crate::mesh::Mesh;
 use std::io::{self, Write};
 
-pub(super) fn write(mesh: &Mesh, encoding: Encoding, out: &mut dyn Write) -> io::Result<()> {
+pub(super) fn write(
+    mesh: &Mesh,
+    encoding: Encoding,
+    stamp: &Stamp,
+    out: &mut dyn Write,
+) -> io::Result<()> {
     let (nv, nt) = (mesh.vertices.len() as u64, mesh.triangles.len() as u64);
-    header(nv, nt, encoding, out)?;
+    header(nv, nt, encoding, stamp, out)?;
     points(&mesh.vertices, encoding, out)?;
     polygons_header(nt, encoding, out)?;
     polygons(&mesh.triangles, encoding, out)?;
@@ -29,7 +35,13 @@ pub(super) fn write(mesh: &Mesh, encoding: Encoding, out: &mut dyn Write) -> io:
 }
 
 /// Everything before the points, after checking the 32-bit limits.
-pub(super) fn header(nv: u64, nt: u64, encoding: Encoding, out: &mut dyn Write) -> io::Result<()> {
+pub(super) fn header(
+    nv: u64,
+    nt: u64,
+    encoding: Encoding,
+    stamp: &Stamp,
+    out: &mut dyn Write,
+) -> io::Result<()> {
     let limit = i32::MAX as u64;
     if nv > limit + 1 || nt.saturating_mul(4) > limit {
         return Err(io::Error::new(
@@ -44,9 +56,16 @@ pub(super) fn header(nv: u64, nt: u64, encoding: Encoding, out: &mut dyn Write) 
         Encoding::Binary => "BINARY",
         Encoding::Ascii => "ASCII",
     };
+    // The title line: at most 256 characters.
+    let mut title = format!("{} mesh", stamp.generator());
+    if let Some(units) = stamp.units {
+        title.push_str(", units: ");
+        title.push_str(units.name());
+    }
+    let title: String = title.chars().take(255).collect();
     write!(
         out,
-        "# vtk DataFile Version 3.0\nlatticebuild mesh\n{name}\nDATASET POLYDATA\n\
+        "# vtk DataFile Version 3.0\n{title}\n{name}\nDATASET POLYDATA\n\
          POINTS {nv} float\n"
     )
 }

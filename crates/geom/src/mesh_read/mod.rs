@@ -1,5 +1,5 @@
-//! Mesh readers: STL (ASCII and binary), OBJ, PLY (ASCII, binary little and big endian) and
-//! OFF, from bytes to a [`TriangleSoup`].
+//! Mesh readers: STL (ASCII and binary), OBJ, PLY (ASCII, binary little and big endian), OFF
+//! and 3MF packages, from bytes to a [`TriangleSoup`].
 //!
 //! Invariants:
 //! - Readers take bytes, never paths; the caller names the file in its own messages.
@@ -15,7 +15,10 @@
 //! - Positions are kept as written: STL repeats each position per facet, and nothing is welded
 //!   here (consumers that need shared vertices weld by exact position themselves).
 //!
-//! Format detection ([`detect`]) looks at the content only: `ply` magic, an `OFF` keyword, a
+//! 3MF is the one format with a unit: [`read`] keeps its coordinates as written, and
+//! [`read_auto_in`] converts them to the caller's unit.
+//!
+//! Format detection ([`detect`]) looks at the content only: a zip archive's magic (3MF), `ply` magic, an `OFF` keyword, a
 //! binary STL whose size is exactly `84 + 50 n` for the count `n` in its header (many binary
 //! STLs begin with `solid` too, so that word alone decides nothing), an ASCII STL beginning
 //! with `solid` and holding only text, or OBJ keywords.
@@ -30,11 +33,16 @@ mod ply;
 mod soup;
 mod stl;
 mod text;
+mod threemf;
+mod unzip;
 
 use std::fmt;
 use thiserror::Error;
 
 pub use soup::TriangleSoup;
+pub use threemf::{ThreeMf, read as read_3mf};
+
+use crate::mesh_io::Units;
 
 /// A mesh file format this module reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -43,12 +51,19 @@ pub enum Format {
     Obj,
     Ply,
     Off,
+    ThreeMf,
 }
 
 impl Format {
-    pub const ALL: [Format; 4] = [Format::Stl, Format::Obj, Format::Ply, Format::Off];
+    pub const ALL: [Format; 5] = [
+        Format::Stl,
+        Format::Obj,
+        Format::Ply,
+        Format::Off,
+        Format::ThreeMf,
+    ];
 
-    /// The format a file extension names (`stl`, `obj`, `ply`, `off`, any case, with or
+    /// The format a file extension names (`stl`, `obj`, `ply`, `off`, `3mf`, any case, with or
     /// without the leading dot).
     pub fn from_extension(extension: &str) -> Option<Format> {
         let ext = extension.trim_start_matches('.');
@@ -63,6 +78,7 @@ impl Format {
             Format::Obj => "obj",
             Format::Ply => "ply",
             Format::Off => "off",
+            Format::ThreeMf => "3mf",
         }
     }
 }
@@ -74,6 +90,7 @@ impl fmt::Display for Format {
             Format::Obj => "OBJ",
             Format::Ply => "PLY",
             Format::Off => "OFF",
+            Format::ThreeMf => "3MF",
         })
     }
 }
@@ -149,7 +166,7 @@ pub enum MeshReadError {
     },
     #[error(
         "cannot tell the mesh format: the content is none of binary STL, ASCII STL (`solid`), \
-         PLY (`ply`), OFF (`OFF`) or OBJ (`v`/`f` lines)"
+         PLY (`ply`), OFF (`OFF`), OBJ (`v`/`f` lines) or 3MF (a zip package)"
     )]
     UnknownFormat,
 }
@@ -161,6 +178,7 @@ pub fn read(bytes: &[u8], format: Format) -> Result<TriangleSoup, MeshReadError>
         Format::Obj => obj::read(bytes)?,
         Format::Ply => ply::read(bytes)?,
         Format::Off => off::read(bytes)?,
+        Format::ThreeMf => threemf::read(bytes)?.soup,
     };
     if soup.triangles.is_empty() {
         return Err(MeshReadError::Empty { format });
@@ -186,8 +204,37 @@ pub fn read_auto(bytes: &[u8], extension: Option<&str>) -> Result<TriangleSoup, 
     read(bytes, format)
 }
 
+/// [`read_auto`], with a 3MF package's coordinates converted from its unit to `units`.
+pub fn read_auto_in(
+    bytes: &[u8],
+    extension: Option<&str>,
+    units: Units,
+) -> Result<TriangleSoup, MeshReadError> {
+    let format = detect(bytes)
+        .or_else(|| extension.and_then(Format::from_extension))
+        .ok_or(MeshReadError::UnknownFormat)?;
+    if format != Format::ThreeMf {
+        return read(bytes, format);
+    }
+    let model = threemf::read(bytes)?;
+    let mut soup = model.soup;
+    if soup.triangles.is_empty() {
+        return Err(MeshReadError::Empty { format });
+    }
+    let scale = model.unit_mm / units.millimeters();
+    if scale != 1.0 {
+        for p in &mut soup.positions {
+            *p = p.map(|c| c * scale);
+        }
+    }
+    Ok(soup)
+}
+
 /// The format of `bytes` judged by content alone, or `None` when nothing is conclusive.
 pub fn detect(bytes: &[u8]) -> Option<Format> {
+    if bytes.starts_with(b"PK\x03\x04") {
+        return Some(Format::ThreeMf);
+    }
     if bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n") {
         return Some(Format::Ply);
     }
