@@ -10,6 +10,7 @@ mod common;
 
 mod codegen;
 mod command_line_edges;
+mod contract;
 mod crystal;
 mod determinism;
 mod examples;

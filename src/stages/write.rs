@@ -5,6 +5,9 @@
 //! A chunked input found corrupt while being read is [`WriteError::CorruptInput`]: the files
 //! being written are discarded (the sink renames only whole files) and the builder reruns the
 //! node that made the mesh.
+//!
+//! With no formats (`formats = []`) nothing is written, but the mesh is measured all the
+//! same: the report is the one the files would have had, less their names.
 
 use std::io::{self, Seek, Write};
 
@@ -223,10 +226,12 @@ impl WriteStage {
             }
         };
         let mut files = files;
+        // `formats = []` writes no file at all, the drawing included (the report only).
         let drawn = artifact
             .planar
             .as_ref()
-            .filter(|p| p.svg.is_some() || !p.element.is_empty());
+            .filter(|p| p.svg.is_some() || !p.element.is_empty())
+            .filter(|_| !self.formats.is_empty());
         if let Some(planar) = drawn {
             // A planar region also gets an SVG drawing: a 2D cell's is drawn here, a tiled
             // region's came drawn (with its scaffold) from the tile stage.
