@@ -270,7 +270,7 @@ fn available_memory() -> Option<u64> {
 /// Free bytes (for unprivileged users) on the file system that holds `dir`, or its nearest
 /// existing ancestor.
 #[cfg(unix)]
-fn free_disk(dir: &Path) -> Option<u64> {
+pub fn free_disk(dir: &Path) -> Option<u64> {
     use std::os::unix::ffi::OsStrExt;
     let absolute = std::path::absolute(dir).ok()?;
     let existing = absolute.ancestors().find(|p| p.exists())?;
@@ -286,7 +286,7 @@ fn free_disk(dir: &Path) -> Option<u64> {
 }
 
 #[cfg(not(unix))]
-fn free_disk(_dir: &Path) -> Option<u64> {
+pub fn free_disk(_dir: &Path) -> Option<u64> {
     None
 }
 

@@ -8,7 +8,9 @@
 //!   no meshes, only the small write records it verifies against the files on disk.
 //! - A corrupt or missing cache entry is never fatal: the node is run again.
 //! - Results go into the cache only after the stage succeeded; a failing stage leaves the
-//!   previous files and entries in place.
+//!   previous files and entries in place. A failing stage fails only what depends on it: the
+//!   other outputs still build ([`Built::failed`] names each failed output and why), while
+//!   a cache error stops the build.
 //! - A 3D tiling's mesh never passes through here whole: the tile stage's chunks are streamed
 //!   into a pending cache entry by a writer thread (committed only when the stage succeeds),
 //!   and its value is a handle on that entry ([`Value::Chunked`]: the open file and its
@@ -31,7 +33,8 @@ use latticebuild_geom::mesh::MeshChunk;
 use latticebuild_geom::mesh_io::{Format, StlStream, Workers};
 
 use crate::cache::{
-    Cache, CacheError, ContentHash, EntryReader, Key, KeyDescription, Lookup, Opened, explain,
+    Cache, CacheError, ContentHash, EntryReader, Key, KeyDescription, Lookup, Opened, SizeLimit,
+    explain,
 };
 use crate::graph::{Graph, NodeId};
 use crate::progress::Progress;
@@ -74,10 +77,22 @@ pub struct OutputResult {
     pub warnings: Vec<String>,
 }
 
+/// What a build produced: the outputs that built, and why each of the others failed.
+#[derive(Debug)]
+pub struct Built {
+    pub results: Vec<OutputResult>,
+    /// `(output, error)` for each needed output that did not build, by output name; outputs
+    /// failing for one stage's failure share its message.
+    pub failed: Vec<(String, String)>,
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum BuildError {
     #[error(transparent)]
     Cache(#[from] CacheError),
+    /// A node that failed earlier in this build (its stage's error, or an input's).
+    #[error("{0}")]
+    Failed(String),
     #[error("stage `{node}` failed: {error}")]
     Stage {
         node: String,
@@ -181,6 +196,10 @@ pub struct Builder<'a> {
     needed: HashSet<NodeId>,
     /// Files written while a tiling ran, by write node, with the hash of the mesh they hold.
     prewritten: Mutex<HashMap<NodeId, WrittenEarly>>,
+    /// Nodes that failed, or whose input did, with the error of the stage that failed.
+    failed: HashMap<NodeId, String>,
+    /// How many bytes of entries the cache may keep beyond this build's ([`Cache::gc`]).
+    cache_limit: SizeLimit,
 }
 
 impl<'a> Builder<'a> {
@@ -199,15 +218,30 @@ impl<'a> Builder<'a> {
             runs: HashMap::new(),
             needed: HashSet::new(),
             prewritten: Mutex::new(HashMap::new()),
+            failed: HashMap::new(),
+            cache_limit: SizeLimit::bytes(u64::MAX),
         }
     }
 
-    /// Builds `targets` (all outputs when empty); the caller has checked the names.
-    pub fn build(mut self, targets: &[String]) -> Result<Vec<OutputResult>, BuildError> {
+    /// Bounds the cache's objects to `bytes` after the build (least recently used entries
+    /// go first; this build's stay). Without it nothing is removed but crashed temporaries.
+    pub fn with_cache_limit(mut self, limit: SizeLimit) -> Self {
+        self.cache_limit = limit;
+        self
+    }
+
+    /// Builds `targets` (all outputs when empty); the caller has checked the names. A stage
+    /// that fails fails the outputs that need it, not the build: `Err` is a cache error.
+    pub fn build(mut self, targets: &[String]) -> Result<Built, BuildError> {
         let needed = self.graph.needed(targets).unwrap_or_default();
         self.run_nodes(&needed)?;
         let mut results = Vec::new();
+        let mut failed = Vec::new();
         for (name, &write) in &self.graph.outputs {
+            if let Some(error) = self.failed.get(&write) {
+                failed.push((name.clone(), error.clone()));
+                continue;
+            }
             let Some(Value::Written(written)) =
                 self.resolved.get(&write).and_then(|r| r.value.clone())
             else {
@@ -236,7 +270,7 @@ impl<'a> Builder<'a> {
                 warnings,
             });
         }
-        Ok(results)
+        Ok(Built { results, failed })
     }
 
     /// The warning a node's payload carries: an automatic-N fit that stopped short of its
@@ -279,6 +313,9 @@ impl<'a> Builder<'a> {
     pub fn build_node(mut self, id: NodeId) -> Result<Vec<u8>, BuildError> {
         let needed = self.graph.closure(&[id]);
         self.run_nodes(&needed)?;
+        if let Some(error) = self.failed.get(&id) {
+            return Err(BuildError::Failed(error.clone()));
+        }
         let mut ignore = |_: Key, _: Arc<MeshArtifact>, _: ContentHash| {};
         self.load(id, &mut ignore)?;
         match self.resolved[&id].value.clone() {
@@ -353,16 +390,24 @@ impl<'a> Builder<'a> {
         for &id in nodes {
             let started = Instant::now();
             let node = &self.graph.nodes[id];
+            if let Some(error) = node.inputs.iter().find_map(|i| self.failed.get(i)) {
+                self.failed.insert(id, error.clone());
+                continue;
+            }
             if let Stage::File(file) = &node.stage {
-                self.read_file(id, file, started)?;
+                let read = self.read_file(id, file, started);
+                self.isolate(id, read)?;
                 continue;
             }
             let inputs: Vec<ContentHash> =
                 node.inputs.iter().map(|i| self.resolved[i].hash).collect();
-            let (key, desc) = node.stage.key(&inputs).map_err(|e| BuildError::Stage {
+            let keyed = node.stage.key(&inputs).map_err(|e| BuildError::Stage {
                 node: node.name.clone(),
                 error: StageError::Key(e),
-            })?;
+            });
+            let Some((key, desc)) = self.isolate(id, keyed)? else {
+                continue;
+            };
             match self.lookup(id, &key)? {
                 CacheStatus::Fresh { hash, value } => {
                     self.cache.record(&node.name, &key, &desc, &hash)?;
@@ -392,11 +437,21 @@ impl<'a> Builder<'a> {
                 }),
             }
         }
-        for node in &to_run {
+        let mut loaded = Vec::with_capacity(to_run.len());
+        for node in to_run {
+            let mut ok = true;
             for input in self.graph.nodes[node.id].inputs.clone() {
-                self.load(input, store_mesh)?;
+                let load = self.load(input, store_mesh);
+                if self.isolate(node.id, load)?.is_none() {
+                    ok = false;
+                    break;
+                }
+            }
+            if ok {
+                loaded.push(node);
             }
         }
+        let to_run = loaded;
         let this = &*self;
         let outcomes: Vec<Ran> = to_run
             .into_par_iter()
@@ -423,16 +478,23 @@ impl<'a> Builder<'a> {
                 mut seconds,
             } = ran;
             let value = match result {
-                Ok(value) => value,
+                Ok(value) => Ok(value),
                 Err(Failure::CorruptInput { input, reason }) => {
                     // Rebuild the input's entry, then run this node again, once.
-                    self.rerun_corrupt(input, &reason, store_mesh)?;
-                    let started = Instant::now();
-                    let again = self.execute(id, &key);
-                    seconds += started.elapsed().as_secs_f64();
-                    self.fail_on(id, again)?
+                    match self.rerun_corrupt(input, &reason, store_mesh) {
+                        Ok(()) => {
+                            let started = Instant::now();
+                            let again = self.execute(id, &key);
+                            seconds += started.elapsed().as_secs_f64();
+                            self.fail_on(id, again)
+                        }
+                        Err(error) => Err(error),
+                    }
                 }
-                Err(failure) => self.fail_on(id, Err(failure))?,
+                Err(failure) => self.fail_on(id, Err(failure)),
+            };
+            let Some(value) = self.isolate(id, value)? else {
+                continue;
             };
             let node = &self.graph.nodes[id];
             let hash = self.store(&key, &value, store_mesh)?;
@@ -606,6 +668,23 @@ impl<'a> Builder<'a> {
             },
         );
         Ok(hash)
+    }
+
+    /// `Some` value of a node's step, or `None` when a stage failed, the failure kept as node
+    /// `id`'s (what needs it fails with it); a cache error stays an error.
+    fn isolate<T>(
+        &mut self,
+        id: NodeId,
+        result: Result<T, BuildError>,
+    ) -> Result<Option<T>, BuildError> {
+        match result {
+            Ok(value) => Ok(Some(value)),
+            Err(BuildError::Cache(error)) => Err(BuildError::Cache(error)),
+            Err(error) => {
+                self.failed.insert(id, error.to_string());
+                Ok(None)
+            }
+        }
     }
 
     /// The value of a run, or the build error naming node `id`.
@@ -1000,18 +1079,15 @@ impl<'a> Builder<'a> {
         })
     }
 
-    /// Drops cache objects no node of this manifest refers to any more, so an optimization
-    /// loop over thousands of parameter values does not fill the disk.
+    /// Keeps what this build used and as many of the other entries, most recently used
+    /// first, as fit in the cache limit, so an optimization loop over thousands of parameter
+    /// values does not fill the disk while one that comes back to a value finds it cached.
     fn collect_garbage(&self, needed: &[NodeId]) -> Result<(), BuildError> {
-        let mut keep: HashSet<Key> = needed.iter().map(|id| self.resolved[id].key).collect();
-        for (id, node) in self.graph.nodes.iter().enumerate() {
-            if !self.resolved.contains_key(&id)
-                && let Some(record) = self.cache.previous(&node.name)
-            {
-                keep.insert(record.key);
-            }
-        }
-        self.cache.gc(&keep)?;
+        let keep: HashSet<Key> = needed
+            .iter()
+            .filter_map(|id| self.resolved.get(id).map(|r| r.key))
+            .collect();
+        self.cache.gc(&keep, self.cache_limit)?;
         Ok(())
     }
 }

@@ -11,6 +11,7 @@ use clap::{CommandFactory, Parser, Subcommand, ValueEnum};
 use crate::commands::build::{BuildArgs, run_build};
 use crate::commands::cell::CellArgs;
 use crate::commands::crystal::CrystalArgs;
+use crate::commands::graph::GraphArgs;
 use crate::commands::sdf::SdfArgs;
 use crate::commands::{self, Failure, ManifestArgs};
 
@@ -52,7 +53,7 @@ enum Command {
     /// Build, then rebuild whenever the manifest or a file it references is saved
     Watch(BuildArgs),
     /// Print the stage graph, marking what is cached and what is stale
-    Graph(ManifestArgs),
+    Graph(GraphArgs),
     /// Remove this manifest's cache entries
     Clean(ManifestArgs),
     /// Fit a symmetric cell (from the cache when fresh) and print its coefficients and values

@@ -1,7 +1,13 @@
 //! Per-output reports: `out/NAME.report.json`, the `--report` JSON array, and the one-line
-//! summary on stderr. Every number comes from our validator run on the mesh that was written,
-//! except a shell's thinnest wall, which the contourer measured on its samples. Warnings
+//! summary on stderr. Every number comes from our validator run on the mesh that was written
+//! (with `formats = []`, the mesh that would have been: the same artifact, measured the same
+//! way), except a shell's thinnest wall, which the contourer measured on its samples. Warnings
 //! (`warnings` in the JSON) are also printed on stderr, one `warning:` line each.
+//!
+//! The JSON is a contract with programs (`docs/report.schema.json`, against which the tests
+//! validate every example's reports): each report says [`SCHEMA_VERSION`], the tool's version,
+//! its units and the output's parameters, and `--report` lists a [`FailedOutput`] for each
+//! output that did not build. A field that changes meaning or goes raises the version.
 
 use serde::Serialize;
 
@@ -23,8 +29,18 @@ pub struct StageReport {
     pub seconds: f64,
 }
 
+/// The version of the report's JSON layout ([`Report::schema_version`]): raised when a field
+/// changes meaning or goes, not when one is added (`docs/report.schema.json` describes it).
+pub const SCHEMA_VERSION: u32 = 1;
+
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Report {
+    /// [`SCHEMA_VERSION`]: what a program reading the report may rely on.
+    pub schema_version: u32,
+    /// The version of latticebuild that built the output.
+    pub tool_version: String,
+    /// `"built"` (a failed output's entry in `--report` says `"failed"`: [`FailedOutput`]).
+    pub status: &'static str,
     pub name: String,
     pub triangles: u64,
     pub vertices: u64,
@@ -96,6 +112,33 @@ pub struct Report {
     /// which it was allowed to run.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub estimate: Option<crate::budget::Estimate>,
+    /// The output's `[outputs.NAME]` table as the build read it, after `--set` and `--unset`
+    /// (defaults not filled in).
+    pub parameters: serde_json::Value,
+}
+
+/// An output that did not build, as `--report` lists it beside the reports of those that did.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FailedOutput {
+    pub schema_version: u32,
+    pub tool_version: String,
+    /// Always `"failed"`.
+    pub status: &'static str,
+    pub output: String,
+    /// Why, as the error line on stderr says it.
+    pub error: String,
+}
+
+impl FailedOutput {
+    pub fn new(output: &str, error: String) -> FailedOutput {
+        FailedOutput {
+            schema_version: SCHEMA_VERSION,
+            tool_version: env!("CARGO_PKG_VERSION").to_string(),
+            status: "failed",
+            output: output.to_string(),
+            error,
+        }
+    }
 }
 
 impl Report {
@@ -125,6 +168,14 @@ impl Report {
             .get(&result.name)
             .is_some_and(|o| o.within.is_some());
         Report {
+            schema_version: SCHEMA_VERSION,
+            tool_version: env!("CARGO_PKG_VERSION").to_string(),
+            status: "built",
+            parameters: manifest
+                .parameters
+                .get(&result.name)
+                .cloned()
+                .unwrap_or_else(|| serde_json::Value::Object(Default::default())),
             defects: defects(s.watertight, s.manifold, planar),
             estimate: None,
             name: result.name.clone(),

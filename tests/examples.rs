@@ -2,7 +2,9 @@
 //! planar region of a 2D cell. Every output is also one solid piece, with no thin-wall warning
 //! and every shell wall at least two spacings thick, except the few listed in `MANY_PIECES`,
 //! whose manifests say why: the examples are meant to be printed. And none seals a cavity
-//! (trapped powder or resin) but those listed in `CAVITIES`, skins and crystal cages.
+//! (trapped powder or resin) but those listed in `CAVITIES`, skins and crystal cages. Each
+//! example's reports validate against `docs/report.schema.json`, and its manifest against
+//! `docs/manifest.schema.json`.
 
 use crate::common;
 
@@ -81,6 +83,7 @@ examples!(
     expression,
     gyroid,
     mesh_inputs,
+    optimizer_loop,
     sources,
     symmetric_cells,
     tiling,
@@ -147,6 +150,14 @@ fn check_example(file: &str) {
         String::from_utf8_lossy(&out.stderr)
     );
     let reports: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    // The automation contract: the reports and the manifest validate against their schemas.
+    crate::contract::assert_valid("report.schema.json", &reports, file);
+    let text = std::fs::read_to_string(&path).expect("manifest text");
+    crate::contract::assert_valid(
+        "manifest.schema.json",
+        &crate::contract::manifest_json(&text),
+        file,
+    );
     for r in reports.as_array().expect("array") {
         // Planar regions of 2D cells are open by nature; every solid must be closed.
         if r["planar"] != true {

@@ -11,6 +11,7 @@ mod common;
 mod codegen;
 mod command_line_edges;
 mod conventions;
+mod contract;
 mod crystal;
 mod determinism;
 mod examples;

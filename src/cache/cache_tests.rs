@@ -10,7 +10,8 @@ use std::thread;
 use std::time::Duration;
 
 use crate::cache::{
-    Cache, CacheError, ContentHash, Key, KeyBuilder, KeyDescription, Lookup, Record, record,
+    Cache, CacheError, ContentHash, Key, KeyBuilder, KeyDescription, Lookup, Record, SizeLimit,
+    record,
 };
 
 fn manifest() -> (tempfile::TempDir, PathBuf) {
@@ -267,7 +268,7 @@ fn gc_keeps_exactly_the_given_keys() {
     let foreign = shard.join("README");
     fs::write(&foreign, b"not ours to judge").unwrap();
 
-    let removed = cache.gc(&keep).unwrap();
+    let removed = cache.gc(&keep, SizeLimit::bytes(0)).unwrap().removed;
     assert_eq!(removed, keys.len() - keep.len());
     for (i, k) in keys.iter().enumerate() {
         let kept = keep.contains(k);
@@ -283,7 +284,60 @@ fn gc_keeps_exactly_the_given_keys() {
     assert!(!crashed.exists());
     assert!(ours.exists());
     assert!(foreign.exists());
-    assert_eq!(cache.gc(&keep).unwrap(), 0, "gc is idempotent");
+    assert_eq!(
+        cache.gc(&keep, SizeLimit::bytes(0)).unwrap().removed,
+        0,
+        "gc is idempotent"
+    );
+}
+
+#[test]
+fn gc_evicts_the_least_recently_used_until_the_rest_fit() {
+    let (_dir, path) = manifest();
+    let cache = Cache::open(&path).unwrap();
+    let keys: Vec<Key> = (0..5).map(|n| keyed(n).0).collect();
+    let payload = vec![7u8; 1000];
+    for k in &keys {
+        cache.put(k, &payload).unwrap();
+    }
+    let entry_bytes = fs::metadata(cache.store().entry_path(&keys[0]))
+        .unwrap()
+        .len();
+    // Use them in the order 3, 0, 4, 1, 2 (one build each), then a build that uses only 2.
+    for &i in &[3usize, 0, 4, 1, 2] {
+        thread::sleep(Duration::from_millis(20));
+        let used = HashSet::from([keys[i]]);
+        assert_eq!(
+            cache.gc(&used, SizeLimit::bytes(u64::MAX)).unwrap().removed,
+            0
+        );
+    }
+    // Room for three entries: the two least recently used other than the one in use (3, 0)
+    // go, and what is in use stays even under a limit that holds nothing.
+    let collected = cache
+        .gc(&HashSet::from([keys[2]]), SizeLimit::bytes(3 * entry_bytes))
+        .unwrap();
+    assert_eq!(collected.removed, 2);
+    assert_eq!(collected.kept_bytes, 3 * entry_bytes);
+    let present: Vec<bool> = keys.iter().map(|k| cache.contains(k).unwrap()).collect();
+    assert_eq!(present, [false, true, true, false, true]);
+    let collected = cache
+        .gc(&HashSet::from([keys[4]]), SizeLimit::bytes(0))
+        .unwrap();
+    assert_eq!(collected.removed, 2, "1 and 2 go, 4 is in use");
+    assert!(cache.contains(&keys[4]).unwrap());
+    assert!(matches!(cache.get(&keys[4]).unwrap(), Lookup::Hit { .. }));
+}
+
+#[test]
+fn the_limit_leaves_half_of_the_space_the_cache_could_have() {
+    let limit = SizeLimit {
+        max_bytes: 4_000,
+        free_disk: Some(1_000),
+    };
+    assert_eq!(limit.allowed(2_000), 1_500, "(2000 + 1000) / 2");
+    assert_eq!(limit.allowed(9_000), 4_000, "max_bytes is the bound");
+    assert_eq!(SizeLimit::bytes(7).allowed(u64::MAX), 7);
 }
 
 #[test]
@@ -294,7 +348,13 @@ fn gc_survives_a_foreign_objects_directory() {
     fs::create_dir_all(objects.join("zz")).unwrap();
     fs::create_dir_all(objects.join("ab").join("nested")).unwrap();
     fs::write(objects.join("stray-file"), b"x").unwrap();
-    assert_eq!(cache.gc(&HashSet::new()).unwrap(), 0);
+    assert_eq!(
+        cache
+            .gc(&HashSet::new(), SizeLimit::bytes(0))
+            .unwrap()
+            .removed,
+        0
+    );
 }
 
 #[test]

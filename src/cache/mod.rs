@@ -11,6 +11,10 @@
 //!     records/contour%3Aoutputs.g.json  per node: last key, its description, output hash
 //! ```
 //!
+//! Entries of every key a node was built with stay (an optimizer that comes back to a value
+//! finds it) until the objects outgrow the size limit: [`Cache::gc`] then removes the least
+//! recently used that this build did not use (`lru.rs`).
+//!
 //! How a stage uses it: build a [`Key`] with [`KeyBuilder`] from the stage kind and version, its
 //! parameters and the [`ContentHash`]es of its inputs; [`Cache::get`] it; on a miss run the stage,
 //! [`Cache::put`] the output, and [`Cache::record`] the node. Under `-v`, [`explain`] the
@@ -34,6 +38,7 @@ mod content_hash;
 mod error;
 mod hex32;
 pub mod key;
+mod lru;
 pub mod param;
 mod record;
 pub mod store;
@@ -57,6 +62,7 @@ pub use key::{
     InputDescription, KEY_CONTEXT, Key, KeyBuilder, KeyDescription, KeyError, ParamDescription,
     explain,
 };
+pub use lru::{Collected, SizeLimit};
 pub use param::Param;
 pub use record::Record;
 pub use store::{
@@ -283,14 +289,15 @@ impl Cache {
         Ok(())
     }
 
-    /// Removes every entry whose key is not in `keep` (pass the keys of every node's latest
-    /// record, e.g. from [`Cache::records`]), so that a long optimisation loop does not fill the
-    /// disk; returns how many entries were removed. Temporary files left by crashed builds go too.
+    /// Marks the entries of `keep` (what this build used) as used now and keeps them; removes
+    /// the least recently used others until the objects fit in `limit` (0 bytes removes every
+    /// other one), so that a long optimisation loop does not fill the disk. Temporary files
+    /// left by crashed builds go too.
     ///
     /// Records are kept even when their entry goes: a record only explains the next miss, and
     /// "parameter `offset` changed" is still true after the old mesh is gone.
-    pub fn gc(&self, keep: &HashSet<Key>) -> Result<usize, CacheError> {
-        let removed = self.store.gc(keep)?;
+    pub fn gc(&self, keep: &HashSet<Key>, limit: SizeLimit) -> Result<Collected, CacheError> {
+        let collected = self.store.gc(keep, limit)?;
         let my_pid = std::process::id();
         if let Ok(entries) = fs::read_dir(&self.records) {
             for entry in entries.filter_map(Result::ok) {
@@ -306,7 +313,7 @@ impl Cache {
                 }
             }
         }
-        Ok(removed)
+        Ok(collected)
     }
 }
 

@@ -37,10 +37,11 @@ use std::fs::{self, File};
 use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
-use crate::cache::atomic::{TempFile, temp_owner_pid, write_atomically};
+use crate::cache::atomic::{TempFile, write_atomically};
 use crate::cache::content_hash::ContentHash;
 use crate::cache::error::CacheError;
 use crate::cache::key::Key;
+use crate::cache::lru::{Collected, SizeLimit};
 use crate::direct_file::DirectFile;
 
 const MAGIC: [u8; 4] = *b"LBC1";
@@ -168,37 +169,13 @@ impl LocalStore {
         read_header(&mut file, file_len).ok().map(|h| h.hash)
     }
 
-    /// Removes every object whose key is not in `keep`, and temporary files left by other
-    /// (crashed) processes; returns the number of objects removed. Files it does not recognise
-    /// are left alone. Must only run while holding the cache lock (as [`super::Cache`] does), or
+    /// Marks every object in `keep` as used now, and removes the least recently used others
+    /// until what is left fits in `limit` (0 bytes: every other one), with temporary files left
+    /// by other (crashed) processes; see [`super::lru`]. Files it does not recognise are left
+    /// alone. Must only run while holding the cache lock (as [`super::Cache`] does), or
     /// another process's in-flight temporary files could be removed.
-    pub fn gc(&self, keep: &HashSet<Key>) -> Result<usize, CacheError> {
-        let my_pid = std::process::id();
-        let mut removed = 0;
-        for shard in read_dir_or_empty(&self.objects)? {
-            let Some(shard_name) = shard.file_name().to_str().map(str::to_owned) else {
-                continue;
-            };
-            let is_shard =
-                shard_name.len() == 2 && shard_name.bytes().all(|b| b.is_ascii_hexdigit());
-            if !is_shard || !shard.path().is_dir() {
-                continue;
-            }
-            for entry in read_dir_or_empty(&shard.path())? {
-                let name = entry.file_name();
-                let Some(name) = name.to_str() else { continue };
-                let path = entry.path();
-                if let Ok(key) = name.parse::<Key>() {
-                    if name.starts_with(&shard_name) && !keep.contains(&key) && remove_file(&path)?
-                    {
-                        removed += 1;
-                    }
-                } else if temp_owner_pid(name).is_some_and(|pid| pid != my_pid) {
-                    remove_file(&path)?;
-                }
-            }
-        }
-        Ok(removed)
+    pub fn gc(&self, keep: &HashSet<Key>, limit: SizeLimit) -> Result<Collected, CacheError> {
+        super::lru::collect(&self.objects, keep, limit)
     }
 }
 
@@ -613,15 +590,5 @@ fn remove_file(path: &Path) -> Result<bool, CacheError> {
         Ok(()) => Ok(true),
         Err(e) if e.kind() == io::ErrorKind::NotFound => Ok(false),
         Err(e) => Err(CacheError::io("remove", path, e)),
-    }
-}
-
-/// The entries of `dir`, or none if it does not exist yet. Unreadable individual entries are
-/// skipped rather than failing the whole walk.
-fn read_dir_or_empty(dir: &Path) -> Result<Vec<fs::DirEntry>, CacheError> {
-    match fs::read_dir(dir) {
-        Ok(entries) => Ok(entries.filter_map(Result::ok).collect()),
-        Err(e) if e.kind() == io::ErrorKind::NotFound => Ok(Vec::new()),
-        Err(e) => Err(CacheError::io("list", dir, e)),
     }
 }

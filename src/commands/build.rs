@@ -9,9 +9,10 @@ use clap::{ArgAction, Args};
 use super::{Failure, ManifestArgs, compile, load_manifest, open_cache, sweep_outputs};
 use crate::build::Builder;
 use crate::diagnostics::color::paint;
+use crate::cache::SizeLimit;
 use crate::files::{OutputDir, write_atomically};
 use crate::progress::{Bars, NoProgress, Progress};
-use crate::report::Report;
+use crate::report::{FailedOutput, Report};
 
 #[derive(Args, Debug, Clone)]
 pub struct BuildArgs {
@@ -86,11 +87,16 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
     } else {
         &NoProgress
     };
-    let results = Builder::new(&graph, &cache, &sink, progress)
+    let limit = SizeLimit {
+        max_bytes: manifest.cache_max_size,
+        free_disk: crate::budget::free_disk(cache.dir()),
+    };
+    let built = Builder::new(&graph, &cache, &sink, progress)
+        .with_cache_limit(limit)
         .build(&args.targets)
         .map_err(|e| Failure::Build(e.to_string()))?;
     let mut reports = Vec::new();
-    for result in &results {
+    for result in &built.results {
         if args.verbose > 0 {
             for run in &result.stages {
                 if run.cached {
@@ -124,17 +130,39 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
         }
         reports.push(report);
     }
+    // The reports of what built and an entry per output that failed, in output-name order.
+    let mut entries: Vec<(&str, serde_json::Value)> = reports
+        .iter()
+        .map(|r| (r.name.as_str(), serde_json::to_value(r)))
+        .chain(built.failed.iter().map(|(name, error)| {
+            let failed = FailedOutput::new(name, error.clone());
+            (name.as_str(), serde_json::to_value(failed))
+        }))
+        .map(|(name, value)| (name, value.expect("reports serialize")))
+        .collect();
+    entries.sort_by(|a, b| a.0.cmp(b.0));
+    let entries: Vec<serde_json::Value> = entries.into_iter().map(|(_, v)| v).collect();
     match args.report.as_deref() {
         None => {}
         Some("-") => {
-            let json = serde_json::to_string_pretty(&reports).expect("reports serialize");
+            let json = serde_json::to_string_pretty(&entries).expect("reports serialize");
             println!("{json}");
         }
         Some(file) => {
-            let json = serde_json::to_string_pretty(&reports).expect("reports serialize");
+            let json = serde_json::to_string_pretty(&entries).expect("reports serialize");
             crate::files::write_user_file(Path::new(file), &mut |w| w.write_all(json.as_bytes()))
                 .map_err(|e| Failure::Build(format!("cannot write `{file}`: {e}")))?;
         }
+    }
+    // Each failing stage once, however many outputs needed it.
+    let mut errors: Vec<&str> = Vec::new();
+    for (_, error) in &built.failed {
+        if !errors.contains(&error.as_str()) {
+            errors.push(error);
+        }
+    }
+    if !errors.is_empty() {
+        return Err(Failure::Build(errors.join("\nerror: ")));
     }
     let defective: Vec<String> = reports
         .iter()

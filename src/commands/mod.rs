@@ -29,6 +29,10 @@ pub struct ManifestArgs {
     /// Override a manifest value, e.g. `--set outputs.g.offset=0.12` (repeatable)
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
+    /// Remove a manifest key, e.g. `--unset outputs.g.voxel` (repeatable; applied before
+    /// every `--set`)
+    #[arg(long = "unset", value_name = "KEY")]
+    pub unset: Vec<String>,
 }
 
 /// Why a build did not succeed, with its exit code.
@@ -56,7 +60,8 @@ impl Failure {
 
 /// Loads and validates the manifest, rendering every diagnostic on failure.
 pub fn load_manifest(args: &ManifestArgs) -> Result<Manifest, Failure> {
-    manifest::load(&args.manifest, &args.set).map_err(|diags| Failure::Usage(render(&diags)))
+    manifest::load_edited(&args.manifest, &args.set, &args.unset)
+        .map_err(|diags| Failure::Usage(render(&diags)))
 }
 
 pub(crate) fn open_cache(path: &Path, quiet: bool) -> Result<Cache, Failure> {

@@ -25,6 +25,7 @@ use crate::diagnostics::Diagnostic;
 mod expression;
 pub mod model;
 mod overrides;
+mod parameters;
 mod schema;
 mod source;
 #[cfg(test)]
@@ -39,13 +40,22 @@ use source::{Report, Sources};
 /// must be a regular file (`/dev/null` or a FIFO is refused before anything is made next to
 /// it) of UTF-8 text (the first byte that is not is shown at its line and column).
 pub fn load(path: &Path, overrides: &[String]) -> Result<Manifest, Vec<Diagnostic>> {
+    load_edited(path, overrides, &[])
+}
+
+/// [`load`] with `--unset` keys removed too (before the `--set` overrides apply).
+pub fn load_edited(
+    path: &Path,
+    overrides: &[String],
+    unsets: &[String],
+) -> Result<Manifest, Vec<Diagnostic>> {
     match crate::files::read_input(path) {
         Ok(bytes) => {
             let name = path.display().to_string();
             let text = String::from_utf8(bytes)
                 .map_err(|e| vec![source::not_utf8(&name, e.as_bytes(), e.utf8_error())])?;
-            let manifest = parse(&text, path, overrides)?;
-            check_input_files(&manifest, &text, path, overrides)?;
+            let manifest = parse_edited(&text, path, overrides, unsets)?;
+            check_input_files(&manifest, &text, path, overrides, unsets)?;
             Ok(manifest)
         }
         Err(err) => {
@@ -66,8 +76,9 @@ fn check_input_files(
     text: &str,
     path: &Path,
     overrides: &[String],
+    unsets: &[String],
 ) -> Result<(), Vec<Diagnostic>> {
-    let sources = Sources::new(path.display().to_string(), text, overrides);
+    let sources = Sources::edited(path.display().to_string(), text, overrides, unsets);
     let mut report = Report::new(&sources);
     let named = manifest
         .cells
@@ -128,9 +139,20 @@ fn check_input_files(
 const SHOWN_SYNTAX_ERRORS: usize = 10;
 
 pub fn parse(text: &str, path: &Path, overrides: &[String]) -> Result<Manifest, Vec<Diagnostic>> {
-    let sources = Sources::new(path.display().to_string(), text, overrides);
+    parse_edited(text, path, overrides, &[])
+}
+
+/// [`parse`] with `--unset` keys removed too (before the `--set` overrides apply).
+pub fn parse_edited(
+    text: &str,
+    path: &Path,
+    overrides: &[String],
+    unsets: &[String],
+) -> Result<Manifest, Vec<Diagnostic>> {
+    let sources = Sources::edited(path.display().to_string(), text, overrides, unsets);
     let mut report = Report::new(&sources);
     let overrides = overrides::parse_all(&mut report);
+    let unsets = overrides::parse_unsets(&mut report);
 
     let (tree, syntax_errors) = DeTable::parse_recoverable(text);
     if !syntax_errors.is_empty() {
@@ -159,6 +181,9 @@ pub fn parse(text: &str, path: &Path, overrides: &[String]) -> Result<Manifest, 
     }
 
     let mut tree = tree.into_inner();
+    for unset in &unsets {
+        overrides::remove(&mut tree, unset, &mut report);
+    }
     for ov in &overrides {
         overrides::apply(&mut tree, ov, &mut report);
     }

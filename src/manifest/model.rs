@@ -37,6 +37,10 @@ pub struct Manifest {
     pub tiled_outputs: BTreeMap<String, TiledOutput>,
     /// Every external file the manifest references (not the manifest itself), for `watch`.
     pub inputs: Vec<PathBuf>,
+    /// Each output's table as read after `--set`/`--unset`, as JSON (a report's `parameters`).
+    pub parameters: BTreeMap<String, serde_json::Value>,
+    /// How many bytes of entries the stage cache may keep (`[cache] max_size`).
+    pub cache_max_size: u64,
 }
 
 /// Where a name was written, so errors found late (in the graph) can still point at it.

@@ -1,4 +1,7 @@
-//! `--set dotted.key=value`: command-line edits applied to the raw tree before validation.
+//! `--set dotted.key=value` and `--unset dotted.key`: command-line edits applied to the raw
+//! tree before validation (every `--unset` first, then every `--set`, each in command-line
+//! order, so `--unset outputs.g.voxel --set outputs.g.samples=64` switches how a grid is
+//! sized).
 //!
 //! Invariants:
 //! - An override is an edit of the raw TOML tree, so an overridden value is validated exactly
@@ -8,6 +11,9 @@
 //!   string (quotes optional), elsewhere the text is a TOML value. Text that is not a TOML value
 //!   and does not look like an attempt at one (`samples=big`) becomes a string, so the validator
 //!   reports it as a type error naming the key instead of a TOML syntax error.
+//! - `--unset` removes a key that is in the tree (written in the file or added by nothing
+//!   else); a key that is not there is an error at the argument, with the keys that are (or
+//!   the closest one), so a typo never passes silently.
 
 use std::borrow::Cow;
 use std::ops::Range;
@@ -89,6 +95,105 @@ fn parse_one<'a>(base: usize, arg: &'a str, report: &mut Report<'_, 'a>) -> Opti
         value,
         value_span: base + value_start..base + value_start + value.len(),
     })
+}
+
+/// One parsed `--unset` argument: the dotted key's segments, each with its span.
+pub(crate) struct Unset<'a> {
+    pub(crate) path: Vec<(&'a str, Range<usize>)>,
+}
+
+/// Parses every `--unset` argument, reporting each malformed one.
+pub(crate) fn parse_unsets<'a>(report: &mut Report<'_, 'a>) -> Vec<Unset<'a>> {
+    let sources = report.sources();
+    let mut unsets = Vec::new();
+    for (base, arg) in (0..sources.unset_count()).filter_map(|i| sources.unset_arg(i)) {
+        let mut path = Vec::new();
+        let mut offset = 0;
+        for segment in arg.split('.') {
+            let trimmed = segment.trim();
+            let start = base + offset + (segment.len() - segment.trim_start().len());
+            path.push((trimmed, start..start + trimmed.len()));
+            offset += segment.len() + 1;
+        }
+        if path.iter().any(|(name, _)| name.is_empty()) || arg.contains('=') {
+            let label = if arg.contains('=') {
+                "`--unset` takes a key, not `key=value`"
+            } else {
+                "expected a dotted key"
+            };
+            report.at(
+                &(base..base + arg.len()),
+                Diagnostic::error(format!("invalid `--unset` argument `{arg}`"))
+                    .with_label(label)
+                    .with_help("for example `--unset outputs.g.voxel`"),
+            );
+            continue;
+        }
+        unsets.push(Unset { path });
+    }
+    unsets
+}
+
+/// Removes the key of `unset` from the tree, or reports that it is not there.
+pub(crate) fn remove<'a>(root: &mut DeTable<'a>, unset: &Unset<'a>, report: &mut Report<'_, 'a>) {
+    let names: Vec<&str> = unset.path.iter().map(|(name, _)| *name).collect();
+    let Some(((last, last_span), parents)) = unset.path.split_last() else {
+        return;
+    };
+    let mut table = root;
+    for (depth, (segment, span)) in parents.iter().enumerate() {
+        let parent = names[..=depth].join(".");
+        if !table.contains_key(*segment) {
+            not_there(table, segment, span, &parent, &names, report);
+            return;
+        }
+        match table.get_mut(*segment).map(Spanned::get_mut) {
+            Some(DeValue::Table(inner)) => table = inner,
+            Some(other) => {
+                let what = schema::describe(other);
+                report.at(
+                    span,
+                    Diagnostic::error(format!("cannot unset `{}`", names.join(".")))
+                        .with_label(format!("`{parent}` is {what}, not a table")),
+                );
+                return;
+            }
+            None => return,
+        }
+    }
+    if table.remove(*last).is_none() {
+        not_there(table, last, last_span, &names.join("."), &names, report);
+    }
+}
+
+/// The error for a `--unset` key (or a table on its way) that the manifest does not have.
+fn not_there(
+    table: &DeTable<'_>,
+    missing: &str,
+    span: &Range<usize>,
+    path: &str,
+    names: &[&str],
+    report: &mut Report<'_, '_>,
+) {
+    let present: Vec<&str> = table.keys().map(|k| k.get_ref().as_ref()).collect();
+    let help = match latticebuild_geom::spelling::closest(missing, present.iter().copied()) {
+        Some(close) => format!("did you mean `{close}`?"),
+        None if present.is_empty() => "the table is empty".to_string(),
+        None => format!(
+            "the keys there are {}",
+            present
+                .iter()
+                .map(|k| format!("`{k}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    };
+    report.at(
+        span,
+        Diagnostic::error(format!("cannot unset `{}`", names.join(".")))
+            .with_label(format!("`{path}` is not in the manifest"))
+            .with_help(help),
+    );
 }
 
 /// Applies one override to the tree, creating tables on the way as needed.

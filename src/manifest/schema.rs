@@ -27,8 +27,11 @@ use super::source::Report;
 use crate::diagnostics::Diagnostic;
 use crate::stages::measure::ReportLevel;
 
+mod cache;
 mod crystals;
 mod islands;
+#[cfg(test)]
+mod json_schema;
 mod keys;
 mod meshes;
 mod optimize;
@@ -54,7 +57,7 @@ type Value<'i> = Spanned<DeValue<'i>>;
 
 /// The length units `[build] units` accepts: what the model's numbers mean (reports echo it).
 pub(crate) const UNITS: [&str; 5] = ["mm", "cm", "m", "um", "in"];
-const SOLIDS: [&str; 4] = ["inside", "outside", "shell", "eccentric_shell"];
+pub(crate) const SOLIDS: [&str; 4] = ["inside", "outside", "shell", "eccentric_shell"];
 const AXES: [&str; 3] = ["x", "y", "z"];
 
 /// The largest number of samples allowed along one axis (a guard against typos such as
@@ -91,12 +94,14 @@ pub(crate) fn validate(
     let mut out_dir = Some("out".to_string());
     let mut units = Some("mm".to_string());
     let mut report_level = Some(ReportLevel::default());
+    let mut cache_max_size = Some(cache::DEFAULT_MAX_SIZE);
     let mut cells_table = None;
     let mut scaffolds_table = None;
     let mut outputs_table = None;
     for (key, value) in root {
         match key.get_ref().as_ref() {
             "build" => (out_dir, units, report_level) = checker.build(value),
+            "cache" => cache_max_size = checker.cache(value),
             "cells" => {
                 cells_table = checker.table("cells", value, "define cells as `[cells.NAME]` tables")
             }
@@ -193,6 +198,8 @@ pub(crate) fn validate(
         program_outputs,
         scaffolds,
         tiled_outputs,
+        parameters: super::parameters::of_outputs(root),
+        cache_max_size: cache_max_size?,
     };
     output_files::check_collisions(&manifest, outputs_table, checker.report);
     Some(manifest)
@@ -753,15 +760,8 @@ impl Checker<'_, '_, '_> {
                 return None;
             }
         };
-        if items.is_empty() {
-            self.error(
-                value.span(),
-                &format!("`{key}` is empty"),
-                "expected at least one format",
-                Some("omit `formats` to write STL, or list formats like `formats = [\"stl\"]`"),
-            );
-            return None;
-        }
+        // An empty list is allowed: the output is built and reported, and no file written
+        // (an optimizer's loop reads the report only).
         let names = Format::ALL.map(Format::name);
         let mut formats = Some(Vec::new());
         for item in items.iter() {

@@ -1,10 +1,11 @@
 //! Where manifest values come from, and the collector of the diagnostics that cite them.
 //!
-//! A value is either written in the manifest file or given on the command line with `--set`.
-//! Both kinds live in one tree, so spans must say which text they index. They do it with one
-//! address space: bytes `0..=text.len()` are the manifest, and each override argument gets the
-//! range after the previous one (with a one-byte gap, so an empty argument still has an address
-//! of its own). [`Sources::locate`] turns any span back into a file, line and column.
+//! A value is either written in the manifest file or given on the command line with `--set`
+//! (and a key removed with `--unset`). Both kinds live in one tree, so spans must say which
+//! text they index. They do it with one address space: bytes `0..=text.len()` are the
+//! manifest, and each `--set` argument, then each `--unset` argument, gets the range after the
+//! previous one (with a one-byte gap, so an empty argument still has an address of its own).
+//! [`Sources::locate`] turns any span back into a file (`--set`, `--unset`), line and column.
 
 use std::ops::Range;
 use std::str::Utf8Error;
@@ -62,21 +63,37 @@ pub(crate) fn not_utf8(name: &str, bytes: &[u8], err: Utf8Error) -> Diagnostic {
 
 /// The file name shown for values that came from a `--set` argument.
 pub(crate) const OVERRIDE_FILE: &str = "--set";
+/// The file name shown for a `--unset` argument.
+pub(crate) const UNSET_FILE: &str = "--unset";
 
 /// The texts spans index: the manifest and each `--set` argument.
 pub(crate) struct Sources<'a> {
     /// The manifest's display name, as given by the caller.
     pub(crate) name: String,
     pub(crate) text: &'a str,
-    /// Each override argument with the address of its first byte.
+    /// Each `--set` argument with the address of its first byte, then each `--unset`.
     overrides: Vec<(usize, &'a str)>,
+    /// How many of `overrides` are `--set` arguments.
+    sets: usize,
 }
 
 impl<'a> Sources<'a> {
+    #[cfg(test)]
     pub(crate) fn new(name: String, text: &'a str, overrides: &'a [String]) -> Sources<'a> {
+        Sources::edited(name, text, overrides, &[])
+    }
+
+    /// The manifest with `--set` arguments `sets` and `--unset` arguments `unsets`.
+    pub(crate) fn edited(
+        name: String,
+        text: &'a str,
+        sets: &'a [String],
+        unsets: &'a [String],
+    ) -> Sources<'a> {
         let mut base = text.len() + 1;
-        let overrides = overrides
+        let overrides = sets
             .iter()
+            .chain(unsets)
             .map(|arg| {
                 let entry = (base, arg.as_str());
                 base += arg.len() + 1;
@@ -87,16 +104,26 @@ impl<'a> Sources<'a> {
             name,
             text,
             overrides,
+            sets: sets.len(),
         }
     }
 
-    /// The address of byte 0 of override `index` and its text.
+    /// The address of byte 0 of `--set` argument `index` and its text.
     pub(crate) fn override_arg(&self, index: usize) -> Option<(usize, &'a str)> {
-        self.overrides.get(index).copied()
+        self.overrides[..self.sets].get(index).copied()
     }
 
     pub(crate) fn override_count(&self) -> usize {
-        self.overrides.len()
+        self.sets
+    }
+
+    /// The address of byte 0 of `--unset` argument `index` and its text.
+    pub(crate) fn unset_arg(&self, index: usize) -> Option<(usize, &'a str)> {
+        self.overrides[self.sets..].get(index).copied()
+    }
+
+    pub(crate) fn unset_count(&self) -> usize {
+        self.overrides.len() - self.sets
     }
 
     /// Whether `span` is in the manifest file (rather than in a `--set` argument).
@@ -110,15 +137,19 @@ impl<'a> Sources<'a> {
             return (self.name.as_str(), self.text, span.clone());
         }
         // The last override starting at or before the span holds it.
-        let (base, arg) = self
+        let (index, (base, arg)) = self
             .overrides
             .iter()
+            .enumerate()
             .rev()
-            .find(|(base, _)| *base <= span.start)
-            .copied()
-            .unwrap_or((0, ""));
+            .find(|(_, (base, _))| *base <= span.start)
+            .map_or((0, (0, "")), |(i, entry)| (i, *entry));
         (
-            OVERRIDE_FILE,
+            if index < self.sets {
+                OVERRIDE_FILE
+            } else {
+                UNSET_FILE
+            },
             arg,
             span.start - base..span.end.saturating_sub(base),
         )

@@ -353,7 +353,7 @@ path = \"/tmp/x\"
         sets: &[],
     },
     ErrCase {
-        name: "array lengths, empty formats, bad cell sizes, bool type, name and path",
+        name: "array lengths, a bad format, bad cell sizes, bool type, name and path",
         manifest: "\
 [cells.gyroid]
 tpms = \"gyroid\"
@@ -362,7 +362,7 @@ tpms = \"gyroid\"
 cell = \"gyroid\"
 domain = { min = [0, 0, 0], max = [1, 1, 1] }
 samples = [2, 3]
-formats = []
+formats = [3]
 cell_size = [1, 0, \"a\"]
 ascii = 1
 path = \"a/../../b\"
@@ -522,6 +522,15 @@ fn defaults_are_filled_in() {
         scaffolds: BTreeMap::new(),
         tiled_outputs: BTreeMap::new(),
         inputs: Vec::new(),
+        parameters: BTreeMap::from([(
+            "g".to_string(),
+            serde_json::json!({
+                "cell": "gyroid",
+                "domain": { "min": [0, 0, 0], "max": [1, 1, 1] },
+                "samples": 32
+            }),
+        )]),
+        cache_max_size: 4_000_000_000,
     };
     assert_eq!(manifest, expected);
 }
@@ -646,7 +655,63 @@ fn set_changes_only_the_overridden_field() {
     if let Some(out) = expected.outputs.get_mut("g") {
         out.solid = Solid::Inside { offset: 0.12 };
     }
+    if let Some(serde_json::Value::Object(table)) = expected.parameters.get_mut("g") {
+        table.insert("offset".into(), serde_json::json!(0.12));
+    }
     assert_eq!(changed, expected);
+}
+
+fn parse_unset(text: &str, sets: &[&str], unsets: &[&str]) -> Result<Manifest, String> {
+    crate::manifest::parse_edited(
+        text,
+        Path::new("lattice.toml"),
+        &strings(sets),
+        &strings(unsets),
+    )
+    .map_err(|diags| render(&diags))
+}
+
+#[test]
+fn unset_then_set_switches_samples_to_voxel() {
+    let switched = parse_unset(VALID, &["outputs.g.voxel=0.05"], &["outputs.g.samples"])
+        .unwrap_or_else(|e| panic!("{e}"));
+    let by_voxel = parse_ok(&VALID.replace("samples = 32", "voxel = 0.05"), &[]);
+    assert_eq!(without_spans(switched.clone()), without_spans(by_voxel));
+    assert_eq!(switched.outputs["g"].samples, [21, 21, 21]);
+    assert_eq!(switched.parameters["g"].get("samples"), None);
+    // Without the unset, both are given: an error, as in a file.
+    let both = render_errors(VALID, &["outputs.g.voxel=0.05"]);
+    assert!(both.contains("voxel"), "{both}");
+    // A whole table goes too.
+    let gone = parse_unset(VALID, &[], &["outputs.g"]).unwrap_or_else(|e| panic!("{e}"));
+    assert!(gone.outputs.is_empty());
+}
+
+#[test]
+fn unset_of_a_key_that_is_not_there_is_an_error_at_the_argument() {
+    let err = parse_unset(VALID, &[], &["outputs.g.sample"]).expect_err("no such key");
+    assert!(
+        err.contains("error: cannot unset `outputs.g.sample`"),
+        "{err}"
+    );
+    assert!(err.contains("--> --unset:1:11"), "{err}");
+    assert!(err.contains("did you mean `samples`?"), "{err}");
+    let err = parse_unset(VALID, &[], &["outputs.h.voxel"]).expect_err("no such table");
+    assert!(err.contains("`outputs.h` is not in the manifest"), "{err}");
+    assert!(err.contains("--> --unset:1:9"), "{err}");
+    let err = parse_unset(VALID, &[], &["outputs.g.domain.min.x"]).expect_err("not a table");
+    assert!(
+        err.contains("`outputs.g.domain.min` is an array, not a table"),
+        "{err}"
+    );
+    let err = parse_unset(VALID, &[], &["outputs.g.samples=3"]).expect_err("a value");
+    assert!(
+        err.contains("`--unset` takes a key, not `key=value`"),
+        "{err}"
+    );
+    // After a `--set` argument, the unset's columns are still its own.
+    let err = parse_unset(VALID, &["outputs.g.offset=0.1"], &["x"]).expect_err("no key x");
+    assert!(err.contains("--> --unset:1:1"), "{err}");
 }
 
 #[test]

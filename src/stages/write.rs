@@ -9,6 +9,9 @@
 //! Every file carries the stage's [`Stamp`]: the tool's version and the model's unit in its
 //! header (STL, PLY, OBJ, VTK, VTU), the output's name and parameters too in a 3MF, and an SVG
 //! drawing gets its physical `width` and `height` in that unit. The stamp is in the key.
+//!
+//! With no formats (`formats = []`) nothing is written, but the mesh is measured all the
+//! same: the report is the one the files would have had, less their names.
 
 use std::io::{self, Seek, Write};
 
@@ -263,10 +266,12 @@ impl WriteStage {
             }
         };
         let mut files = files;
+        // `formats = []` writes no file at all, the drawing included (the report only).
         let drawn = artifact
             .planar
             .as_ref()
-            .filter(|p| p.svg.is_some() || !p.element.is_empty());
+            .filter(|p| p.svg.is_some() || !p.element.is_empty())
+            .filter(|_| !self.formats.is_empty());
         if let Some(planar) = drawn {
             // A planar region also gets an SVG drawing: a 2D cell's is drawn here, a tiled
             // region's came drawn (with its scaffold) from the tile stage.

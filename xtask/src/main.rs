@@ -98,6 +98,7 @@ fn release_binary() -> Result<PathBuf, String> {
 const GOLDEN_TESTS: &[&str] = &[
     "golden::",
     "render_exactly",
+    "manifest_json_schema_is_generated",
     "command_line_edges::a_manifest_that_is_not_utf8",
 ];
 

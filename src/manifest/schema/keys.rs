@@ -9,9 +9,11 @@
 
 // `[build]` and the top level.
 
-pub(super) const TOP_KEYS: [&str; 4] = ["build", "cells", "scaffolds", "outputs"];
+pub(super) const TOP_KEYS: [&str; 5] = ["build", "cache", "cells", "scaffolds", "outputs"];
 
 pub(super) const BUILD_KEYS: [&str; 3] = ["out_dir", "units", "report"];
+
+pub(super) const CACHE_KEYS: [&str; 1] = ["max_size"];
 
 // `[cells.NAME]`.
 
@@ -227,6 +229,7 @@ mod tests {
     const TABLES: &[(&str, &[&str])] = &[
         ("", &TOP_KEYS),
         ("build", &BUILD_KEYS),
+        ("cache", &CACHE_KEYS),
         ("cells.*", &CELL_KEYS),
         ("cells.*", &SOURCE_KEYS),
         ("cells.*", &SYMMETRIC_KEYS),

@@ -41,7 +41,7 @@ fn is_planar(cells: &BTreeMap<String, Cell>, cell: &str) -> bool {
 pub(crate) fn files_by_output(manifest: &Manifest) -> Vec<(&str, Vec<String>)> {
     let files = |stem: &str, formats: &[Format], planar: bool| -> Vec<String> {
         let stem = normalise(stem);
-        let svg = planar.then_some("svg");
+        let svg = (planar && !formats.is_empty()).then_some("svg");
         let extensions = formats.iter().map(|f| f.name()).chain(svg);
         extensions.map(|ext| format!("{stem}.{ext}")).collect()
     };
