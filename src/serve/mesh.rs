@@ -103,9 +103,8 @@ impl Clusterer {
             self.sums.push([0.0; 3]);
             self.counts.push(0);
         }
-        let sum = &mut self.sums[id as usize];
-        for a in 0..3 {
-            sum[a] += f64::from(p[a]);
+        for (sum, c) in self.sums[id as usize].iter_mut().zip(p) {
+            *sum += f64::from(c);
         }
         self.counts[id as usize] += 1;
         id
@@ -263,10 +262,8 @@ pub fn encode(mesh: &DisplayMesh) -> Vec<u8> {
     let mut lo = [f32::INFINITY; 3];
     let mut hi = [f32::NEG_INFINITY; 3];
     for p in &mesh.positions {
-        for a in 0..3 {
-            lo[a] = lo[a].min(p[a]);
-            hi[a] = hi[a].max(p[a]);
-        }
+        lo = std::array::from_fn(|a| lo[a].min(p[a]));
+        hi = std::array::from_fn(|a| hi[a].max(p[a]));
     }
     if mesh.positions.is_empty() {
         lo = [0.0; 3];
@@ -295,8 +292,8 @@ pub fn encode(mesh: &DisplayMesh) -> Vec<u8> {
         out.extend_from_slice(&v.to_le_bytes());
     }
     for p in &mesh.positions {
-        for a in 0..3 {
-            let q = ((f64::from(p[a]) - f64::from(lo[a])) / f64::from(step[a])).round();
+        for ((&c, &lo), &step) in p.iter().zip(&lo).zip(&step) {
+            let q = ((f64::from(c) - f64::from(lo)) / f64::from(step)).round();
             out.extend_from_slice(&(q.clamp(0.0, 65535.0) as u16).to_le_bytes());
         }
     }
@@ -456,16 +453,16 @@ mod tests {
         let indices_at = (44 + 6 * nv).div_ceil(4) * 4;
         assert_eq!(bytes.len(), indices_at + 12 * nt);
         for (v, p) in shown.positions.iter().enumerate() {
-            for a in 0..3 {
+            for (a, &c) in p.iter().enumerate() {
                 let at = 44 + 6 * v + 2 * a;
                 let q = u16::from_le_bytes([bytes[at], bytes[at + 1]]);
                 let back = float(20 + 4 * a) + f32::from(q) * float(32 + 4 * a);
-                assert!((back - p[a]).abs() <= 2.0 / 65535.0 + 1e-6);
+                assert!((back - c).abs() <= 2.0 / 65535.0 + 1e-6);
             }
         }
         for (t, tri) in shown.triangles.iter().enumerate() {
-            for c in 0..3 {
-                assert_eq!(word(indices_at + 12 * t + 4 * c), tri[c]);
+            for (c, &index) in tri.iter().enumerate() {
+                assert_eq!(word(indices_at + 12 * t + 4 * c), index);
             }
         }
     }
