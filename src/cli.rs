@@ -50,8 +50,9 @@ pub fn command() -> clap::Command {
 enum Command {
     /// Build every output that is out of date (or only the named ones)
     Build(BuildArgs),
-    /// Build, then rebuild whenever the manifest or a file it references is saved
-    Watch(BuildArgs),
+    /// Build, then rebuild whenever the manifest or a file it references is saved (`--serve`:
+    /// and show the outputs live in a browser)
+    Watch(commands::watch::WatchArgs),
     /// Print the stage graph, marking what is cached and what is stale
     Graph(GraphArgs),
     /// Remove this manifest's cache entries
@@ -105,7 +106,7 @@ pub fn main() -> ExitCode {
             exit(run_build(&args))
         }
         Command::Watch(args) => {
-            if let Err(f) = set_jobs(args.jobs) {
+            if let Err(f) = set_jobs(args.build.jobs) {
                 return f.exit();
             }
             commands::watch::watch(&args)

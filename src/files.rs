@@ -106,6 +106,27 @@ pub fn read_input(path: &Path) -> io::Result<Vec<u8>> {
     Ok(bytes)
 }
 
+/// The regular file at `path`, opened for streaming, and its length: [`read_input`]'s checks
+/// for a file too big to read whole (a tiling's STL for display).
+pub fn open_regular(path: &Path) -> io::Result<(io::BufReader<File>, u64)> {
+    if let Some(kind) = not_regular(&fs::metadata(path)?) {
+        return Err(not_regular_error(kind));
+    }
+    let mut options = OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        options.custom_flags(libc::O_NONBLOCK);
+    }
+    let file = options.open(path)?;
+    let meta = file.metadata()?;
+    if let Some(kind) = not_regular(&meta) {
+        return Err(not_regular_error(kind));
+    }
+    Ok((io::BufReader::with_capacity(1 << 20, file), meta.len()))
+}
+
 /// [`read_input`] as UTF-8 text.
 pub fn read_input_text(path: &Path) -> io::Result<String> {
     String::from_utf8(read_input(path)?)
@@ -132,6 +153,11 @@ impl<W: Write> Write for CountingWriter<W> {
     fn flush(&mut self) -> io::Result<()> {
         self.inner.flush()
     }
+}
+
+/// The length of the file at `path`, if it can be looked at.
+pub fn file_len(path: &Path) -> Option<u64> {
+    fs::metadata(path).ok().map(|m| m.len())
 }
 
 /// Modification time of `path` in nanoseconds since the epoch, if the platform has one.

@@ -14,6 +14,7 @@ pub mod interrupt;
 pub mod manifest;
 pub mod progress;
 pub mod report;
+pub mod serve;
 pub mod stages;
 
 #[cfg(test)]

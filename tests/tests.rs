@@ -28,6 +28,7 @@ mod pieces;
 mod point_cells;
 mod sdf_cli;
 mod sdf_manifest;
+mod serve;
 mod shells;
 mod symmetric;
 mod tiling;

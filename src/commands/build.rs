@@ -41,8 +41,22 @@ pub struct BuildArgs {
     pub allow_large: bool,
 }
 
+/// What a build produced, for `watch --serve`: the reports and the stage graph it ran.
+pub struct Built {
+    pub reports: Vec<Report>,
+    pub graph: crate::graph::Graph,
+    /// The nodes the build needed, in build order.
+    pub needed: Vec<crate::graph::NodeId>,
+}
+
 /// One build: manifest to files and reports.
 pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
+    run_build_keeping(args, &mut None)
+}
+
+/// [`run_build`], also leaving what it built in `built` once every report is written (even
+/// when it then fails over defective meshes).
+pub fn run_build_keeping(args: &BuildArgs, built: &mut Option<Built>) -> Result<(), Failure> {
     let manifest = load_manifest(&args.manifest)?;
     crate::files::check_report_path(args.report.as_deref(), &manifest).map_err(Failure::Usage)?;
     let graph = compile(&manifest)?;
@@ -169,6 +183,12 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
         .filter(|r| !r.defects.is_empty())
         .map(|r| format!("`{}`: {}", r.name, r.defects.join("; ")))
         .collect();
+    let needed = graph.needed(&args.targets).unwrap_or_default();
+    *built = Some(Built {
+        reports,
+        graph,
+        needed,
+    });
     if !defective.is_empty() && !args.allow_defects {
         return Err(Failure::Build(format!(
             "{} output(s) failed the mesh check (written and reported, but not usable as \

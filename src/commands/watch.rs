@@ -13,6 +13,10 @@
 //! - A broken manifest prints its errors and keeps watching.
 //! - Ctrl-C between builds ends the watch (exit 0); during a build it stops the build at once,
 //!   removing its temporary files ([`crate::interrupt`]).
+//! - With `--serve`, the page ([`crate::serve`]) is told when a build starts and, after it,
+//!   gets the reports, the stage graph and the error of the build (a failed build keeps the
+//!   last good outputs); the meshes are read here, from the files the reports name, never by
+//!   the server. Serving adds no build and no wake-up: an idle watch still does nothing.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::Read;
@@ -24,10 +28,30 @@ use std::time::Duration;
 use notify::RecursiveMode;
 use notify_debouncer_full::{DebounceEventResult, new_debouncer};
 
-use crate::commands::build::{BuildArgs, run_build};
+use clap::Args;
+
+use crate::commands::build::{BuildArgs, Built, run_build_keeping};
 use crate::commands::{Failure, load_manifest};
 use crate::diagnostics::color::paint;
 use crate::interrupt::set_idle;
+use crate::serve::state::{DagNode, MeshCache};
+use crate::serve::{Server, mesh, parse_address};
+
+#[derive(Args, Debug, Clone)]
+pub struct WatchArgs {
+    #[command(flatten)]
+    pub build: BuildArgs,
+    /// Also serve a live 3D view of the outputs, their reports, the stage graph and the last
+    /// error at ADDR (default 127.0.0.1:8700; port 0 picks a free one; the address is printed)
+    #[arg(
+        long,
+        value_name = "ADDR",
+        num_args = 0..=1,
+        default_missing_value = "127.0.0.1:8700",
+        value_parser = parse_address
+    )]
+    pub serve: Option<std::net::SocketAddr>,
+}
 
 /// What a watched file held: `None` when it could not be read as a regular file.
 type Contents = BTreeMap<PathBuf, Option<blake3::Hash>>;
@@ -62,7 +86,72 @@ fn contents(files: &BTreeSet<PathBuf>) -> Contents {
     files.iter().map(|f| (f.clone(), content_hash(f))).collect()
 }
 
-pub fn watch(args: &BuildArgs) -> ExitCode {
+/// The stage graph of `built` with each node's fate in this build.
+fn dag(built: &Built) -> Vec<DagNode> {
+    let mut cached: BTreeMap<&str, bool> = BTreeMap::new();
+    for report in &built.reports {
+        for stage in &report.stages {
+            cached.insert(&stage.stage, stage.cached);
+        }
+    }
+    let nodes = &built.graph.nodes;
+    built
+        .needed
+        .iter()
+        .map(|&id| DagNode {
+            node: nodes[id].name.clone(),
+            stage: nodes[id].stage.kind().to_string(),
+            inputs: nodes[id]
+                .inputs
+                .iter()
+                .map(|&i| nodes[i].name.clone())
+                .collect(),
+            status: match cached.get(nodes[id].name.as_str()) {
+                Some(true) => "cached",
+                Some(false) => "rebuilt",
+                None => "not built",
+            },
+        })
+        .collect()
+}
+
+/// Tells the page what the build gave: its outputs when it got as far as reports, and its
+/// error (`None` clears the last one).
+fn publish(
+    server: &Server,
+    meshes: &mut MeshCache,
+    manifest: &Path,
+    built: Option<Built>,
+    error: Option<String>,
+) {
+    let mut next = match built {
+        Some(built) => meshes.published(
+            &manifest.display().to_string(),
+            &built.reports,
+            dag(&built),
+            mesh::DEFAULT_BUDGET,
+        ),
+        None => (*server.shared.get()).clone(),
+    };
+    next.manifest = manifest.display().to_string();
+    next.building = false;
+    next.error = error;
+    server.shared.publish(next);
+}
+
+pub fn watch(watch_args: &WatchArgs) -> ExitCode {
+    let args = &watch_args.build;
+    let server = match watch_args.serve {
+        None => None,
+        Some(address) => match Server::start(address) {
+            Ok(server) => {
+                println!("serving http://{}/ (Ctrl-C to stop)", server.address);
+                Some(server)
+            }
+            Err(e) => return Failure::Build(format!("cannot serve on {address}: {e}")).exit(),
+        },
+    };
+    let mut meshes = MeshCache::default();
     let (tx, rx) = mpsc::channel::<Vec<PathBuf>>();
     let debouncer = new_debouncer(
         Duration::from_millis(200),
@@ -111,10 +200,23 @@ pub fn watch(args: &BuildArgs) -> ExitCode {
 
         let built_from = contents(&files);
         set_idle(false);
-        match run_build(args) {
-            Ok(()) => {}
-            Err(Failure::Usage(text)) => eprint!("{}", paint(&text)),
-            Err(Failure::Build(text)) => eprint!("{}", paint(&format!("error: {text}\n"))),
+        if let Some(server) = &server {
+            server.shared.publish(server.shared.get().building());
+        }
+        let mut built = None;
+        let error = match run_build_keeping(args, &mut built) {
+            Ok(()) => None,
+            Err(Failure::Usage(text)) => {
+                eprint!("{}", paint(&text));
+                Some(text)
+            }
+            Err(Failure::Build(text)) => {
+                eprint!("{}", paint(&format!("error: {text}\n")));
+                Some(format!("error: {text}\n"))
+            }
+        };
+        if let Some(server) = &server {
+            publish(server, &mut meshes, &args.manifest.manifest, built, error);
         }
         set_idle(true);
         if !args.quiet {

@@ -3,7 +3,8 @@
 //! `bench_geom.rs`), `cargo xtask bench-mesh [triangles] [samples]`,
 //! `cargo xtask bench-tile [--resolution N] [--formats stl,ply] [--keep]`,
 //! `cargo xtask codegen [--check]`, `cargo xtask fuzz [--minutes M] [TARGET…]` (see
-//! `fuzz/mod.rs`; `--list`, `--replay`), `cargo xtask man [DIR]` (see `man.rs`).
+//! `fuzz/mod.rs`; `--list`, `--replay`), `cargo xtask man [DIR]` (see `man.rs`),
+//! `cargo xtask vendor-web` (see `vendor_web.rs`).
 //!
 //! Invariant: every generated file has a test that fails when it is stale
 //! (`tests/codegen.rs`), so generated text cannot drift from its source.
@@ -13,6 +14,7 @@ mod bench_mesh;
 mod bench_tile;
 mod fuzz;
 mod man;
+mod vendor_web;
 
 /// Counts live heap bytes so that the fuzz runner can bound them (see `fuzz/bound.rs`).
 #[global_allocator]
@@ -32,6 +34,7 @@ fn main() -> ExitCode {
         Some("codegen") => codegen(args.iter().any(|a| a == "--check")),
         Some("fuzz") => fuzz::run(&args[1..]),
         Some("man") => man::run(&args[1..]),
+        Some("vendor-web") => vendor_web::run(),
         // Hidden: the child process of `fuzz`, one per target, fed inputs on stdin.
         Some("fuzz-runner") => match args.get(1) {
             Some(target) => fuzz::serve(target),
@@ -41,7 +44,7 @@ fn main() -> ExitCode {
             "usage: cargo xtask golden [--bless] | bench [--sizes 200,400,800] [--no-peers] \
                   [--field separable|dense] | bench geom [expr|mesh-io|periodic|scaffold|symmetric|validate|constrain|measure]… | bench-mesh [triangles] [samples] | bench-tile \
                   [--resolution N] [--formats stl,ply] [--keep] | codegen [--check] | fuzz \
-                  [--minutes M] [--seed N] [TARGET…] | fuzz --list | fuzz --replay | man [DIR]"
+                  [--minutes M] [--seed N] [TARGET…] | fuzz --list | fuzz --replay | man [DIR] | vendor-web"
                 .to_string(),
         ),
     };
