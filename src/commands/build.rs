@@ -105,12 +105,12 @@ pub fn run_build_keeping(args: &BuildArgs, built: &mut Option<Built>) -> Result<
         max_bytes: manifest.cache_max_size,
         free_disk: crate::budget::free_disk(cache.dir()),
     };
-    let built = Builder::new(&graph, &cache, &sink, progress)
+    let outcome = Builder::new(&graph, &cache, &sink, progress)
         .with_cache_limit(limit)
         .build(&args.targets)
         .map_err(|e| Failure::Build(e.to_string()))?;
     let mut reports = Vec::new();
-    for result in &built.results {
+    for result in &outcome.results {
         if args.verbose > 0 {
             for run in &result.stages {
                 if run.cached {
@@ -148,7 +148,7 @@ pub fn run_build_keeping(args: &BuildArgs, built: &mut Option<Built>) -> Result<
     let mut entries: Vec<(&str, serde_json::Value)> = reports
         .iter()
         .map(|r| (r.name.as_str(), serde_json::to_value(r)))
-        .chain(built.failed.iter().map(|(name, error)| {
+        .chain(outcome.failed.iter().map(|(name, error)| {
             let failed = FailedOutput::new(name, error.clone());
             (name.as_str(), serde_json::to_value(failed))
         }))
@@ -170,25 +170,27 @@ pub fn run_build_keeping(args: &BuildArgs, built: &mut Option<Built>) -> Result<
     }
     // Each failing stage once, however many outputs needed it.
     let mut errors: Vec<&str> = Vec::new();
-    for (_, error) in &built.failed {
+    for (_, error) in &outcome.failed {
         if !errors.contains(&error.as_str()) {
             errors.push(error);
         }
     }
-    if !errors.is_empty() {
-        return Err(Failure::Build(errors.join("\nerror: ")));
-    }
+    let errors = errors.join("\nerror: ");
     let defective: Vec<String> = reports
         .iter()
         .filter(|r| !r.defects.is_empty())
         .map(|r| format!("`{}`: {}", r.name, r.defects.join("; ")))
         .collect();
     let needed = graph.needed(&args.targets).unwrap_or_default();
+    // What did build is kept even when another output failed, so `watch --serve` shows it.
     *built = Some(Built {
         reports,
         graph,
         needed,
     });
+    if !errors.is_empty() {
+        return Err(Failure::Build(errors));
+    }
     if !defective.is_empty() && !args.allow_defects {
         return Err(Failure::Build(format!(
             "{} output(s) failed the mesh check (written and reported, but not usable as \
