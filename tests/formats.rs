@@ -36,12 +36,16 @@ fn read(p: &Project, file: &str) -> Vec<u8> {
     std::fs::read(p.out(file)).expect("output file")
 }
 
+/// A VTU's appended arrays: points, connectivity, offsets and types.
+type VtuArrays = (Vec<[f32; 3]>, Vec<[i64; 3]>, Vec<i64>, Vec<u8>);
+
 /// The VTU's appended arrays, decoded from the bytes its head describes.
-fn decode_vtu(bytes: &[u8]) -> (Vec<[f32; 3]>, Vec<[i64; 3]>, Vec<i64>, Vec<u8>) {
+fn decode_vtu(bytes: &[u8]) -> VtuArrays {
     let text = String::from_utf8_lossy(bytes);
     let attribute = |name: &str| -> u64 {
         let at = text.find(&format!("{name}=\"")).expect(name) + name.len() + 2;
-        text[at..].split('"').next().unwrap().parse().unwrap()
+        let value = text[at..].split('"').next().expect("a quoted value");
+        value.parse().expect("a count")
     };
     let (nv, nt) = (attribute("NumberOfPoints"), attribute("NumberOfCells"));
     let marker = b"<AppendedData encoding=\"raw\">\n_";
@@ -52,7 +56,7 @@ fn decode_vtu(bytes: &[u8]) -> (Vec<[f32; 3]>, Vec<[i64; 3]>, Vec<i64>, Vec<u8>)
         + marker.len();
     let mut at = start;
     let mut block = |expected: u64| -> &[u8] {
-        let len = u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap());
+        let len = u64::from_le_bytes(bytes[at..at + 8].try_into().expect("8 bytes"));
         assert_eq!(len, expected);
         let data = &bytes[at + 8..at + 8 + len as usize];
         at += 8 + len as usize;
@@ -60,12 +64,12 @@ fn decode_vtu(bytes: &[u8]) -> (Vec<[f32; 3]>, Vec<[i64; 3]>, Vec<i64>, Vec<u8>)
     };
     let f32s = |b: &[u8]| -> Vec<f32> {
         b.chunks_exact(4)
-            .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+            .map(|c| f32::from_le_bytes(c.try_into().expect("4 bytes")))
             .collect()
     };
     let i64s = |b: &[u8]| -> Vec<i64> {
         b.chunks_exact(8)
-            .map(|c| i64::from_le_bytes(c.try_into().unwrap()))
+            .map(|c| i64::from_le_bytes(c.try_into().expect("8 bytes")))
             .collect()
     };
     let points = f32s(block(12 * nv));
