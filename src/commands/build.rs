@@ -37,11 +37,17 @@ pub struct BuildArgs {
     /// Build even when the estimated memory or disk use exceeds what the machine has
     #[arg(long)]
     pub allow_large: bool,
+    /// Draw no `NAME.png` previews (as `[build] previews = false`): for optimisation loops
+    #[arg(long)]
+    pub no_previews: bool,
 }
 
 /// One build: manifest to files and reports.
 pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
-    let manifest = load_manifest(&args.manifest)?;
+    let mut manifest = load_manifest(&args.manifest)?;
+    if args.no_previews {
+        manifest.previews = false;
+    }
     crate::files::check_report_path(args.report.as_deref(), &manifest).map_err(Failure::Usage)?;
     let graph = compile(&manifest)?;
     if let Err(unknown) = graph.needed(&args.targets) {

@@ -21,11 +21,13 @@ use crate::stages::file::FileStage;
 use crate::stages::islands::IslandsStage;
 use crate::stages::mesh::MeshCellStage;
 use crate::stages::points::PointCellStage;
+use crate::stages::preview::PreviewStage;
 use crate::stages::program::ProgramStage;
 use crate::stages::sizing::{DensityStage, Over};
 use crate::stages::symmetric::{Combination, CombineStage, ConstrainStage, FitStage, SampleStage};
 use crate::stages::tile::TileStage;
 use crate::stages::voxels::VoxelCellStage;
+use crate::stages::warnings;
 use crate::stages::write::WriteStage;
 
 /// Index of a node in [`Graph::nodes`].
@@ -45,6 +47,8 @@ pub struct Graph {
     pub nodes: Vec<Node>,
     /// For each output name, its final (`write`) node.
     pub outputs: BTreeMap<String, NodeId>,
+    /// For each output name, its `preview` node (none with previews off).
+    pub previews: BTreeMap<String, NodeId>,
 }
 
 /// Compiles cells into nodes once each, following blends and Minkowski combinations.
@@ -196,6 +200,24 @@ impl CellCompiler<'_> {
     }
 }
 
+/// Output `name`'s preview stage, when the manifest draws previews.
+fn preview(
+    manifest: &Manifest,
+    name: &str,
+    stem: &str,
+    domain: Option<[[f64; 3]; 2]>,
+    within: bool,
+) -> Option<PreviewStage> {
+    manifest.previews.then(|| PreviewStage {
+        output: name.to_string(),
+        stem: stem.to_string(),
+        size: manifest.preview_size,
+        domain,
+        within,
+        carriers: Vec::new(),
+    })
+}
+
 /// A dependency cycle, as the path of node names that closes it.
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
 #[error("dependency cycle: {}", .0.join(" → "))]
@@ -228,7 +250,15 @@ impl Graph {
             }
             let contour = graph.push(format!("contour:{name}"), stage, inputs);
             let write = WriteStage::new(output, manifest.report);
-            graph.finish_output(name, &output.islands, contour, write);
+            let domain = Some([output.domain_min, output.domain_max]);
+            let preview = preview(
+                manifest,
+                name,
+                &output.stem,
+                domain,
+                output.within.is_some(),
+            );
+            graph.finish_output(name, &output.islands, contour, write, preview);
         }
         // An SDF output: `sdf` reading a `file:` node per mesh of its program, then `write`.
         for (name, output) in &manifest.program_outputs {
@@ -245,7 +275,8 @@ impl Graph {
                 // round a part filled by a program (a ball of gyroid) is not a pore.
                 pore_box: None,
             };
-            graph.finish_output(name, &output.islands, solid, write);
+            let preview = preview(manifest, name, &output.stem, None, false);
+            graph.finish_output(name, &output.islands, solid, write, preview);
         }
         // A tiled output: `tile` reading its cells' `constrain` nodes (and the scaffold's
         // `file:` node), then `write`.
@@ -271,7 +302,8 @@ impl Graph {
                 report: manifest.report,
                 pore_box: None,
             };
-            graph.finish_output(name, &output.islands, tiled, write);
+            let preview = preview(manifest, name, &output.stem, None, false);
+            graph.finish_output(name, &output.islands, tiled, write, preview);
         }
         graph.check_order()?;
         Ok(graph)
@@ -316,17 +348,33 @@ impl Graph {
     /// it when the output removes pieces (only then, so outputs without the keys keep the
     /// graph, keys and cache entries they had).
     /// An output's last nodes after the one making its mesh: `islands` when it removes loose
-    /// pieces, then `write`, which becomes the output's target.
+    /// pieces, then `write`, which becomes the output's target, and `preview` (reading the
+    /// mesh, the write's record and the cell nodes whose warnings its caption repeats).
     fn finish_output(
         &mut self,
         name: &str,
         filter: &IslandFilter,
         mesh: NodeId,
         write: WriteStage,
+        preview: Option<PreviewStage>,
     ) {
         let mesh = self.islands(name, filter, mesh);
         let write = self.push(format!("write:{name}"), Stage::Write(write), vec![mesh]);
         self.outputs.insert(name.to_string(), write);
+        if let Some(mut preview) = preview {
+            let carriers: Vec<NodeId> = self
+                .closure(&[mesh])
+                .into_iter()
+                .filter(|&id| warnings::carries_warning(&self.nodes[id].stage))
+                .collect();
+            preview.carriers = carriers
+                .iter()
+                .map(|&id| self.nodes[id].name.clone())
+                .collect();
+            let inputs = [mesh, write].into_iter().chain(carriers).collect();
+            let node = self.push(format!("preview:{name}"), Stage::Preview(preview), inputs);
+            self.previews.insert(name.to_string(), node);
+        }
     }
 
     fn islands(&mut self, name: &str, filter: &IslandFilter, mesh: NodeId) -> NodeId {
@@ -394,11 +442,16 @@ impl Graph {
         if !unknown.is_empty() {
             return Err(unknown);
         }
-        let roots: Vec<NodeId> = if targets.is_empty() {
-            self.outputs.values().copied().collect()
+        let names: Vec<&String> = if targets.is_empty() {
+            self.outputs.keys().collect()
         } else {
-            targets.iter().map(|t| self.outputs[t]).collect()
+            targets.iter().collect()
         };
+        let roots: Vec<NodeId> = names
+            .into_iter()
+            .flat_map(|t| [Some(self.outputs[t]), self.previews.get(t).copied()])
+            .flatten()
+            .collect();
         Ok(self.closure(&roots))
     }
 

@@ -5,7 +5,7 @@ use std::collections::HashMap;
 
 use super::{Graph, NodeId};
 use crate::cache::{Cache, ContentHash, Lookup, explain};
-use crate::stages::{OutputSink, Stage, WrittenOutput};
+use crate::stages::{OutputSink, Stage, WrittenFile, WrittenOutput};
 
 /// One line per node, in build order: name, status, and what it reads.
 pub fn lines(graph: &Graph, cache: &Cache, sink: &dyn OutputSink) -> Vec<String> {
@@ -56,13 +56,15 @@ fn write_is_current(
     key: &crate::cache::Key,
     sink: &dyn OutputSink,
 ) -> bool {
-    if !matches!(node.stage, Stage::Write(_)) {
-        return true;
-    }
-    match cache.get(key) {
-        Ok(Lookup::Hit { payload, .. }) => serde_json::from_slice::<WrittenOutput>(&payload)
-            .map(|w| w.files.iter().all(|f| sink.holds(f)))
-            .unwrap_or(false),
-        _ => false,
-    }
+    let Ok(Lookup::Hit { payload, .. }) = (match node.stage {
+        Stage::Write(_) | Stage::Preview(_) => cache.get(key),
+        _ => return true,
+    }) else {
+        return false;
+    };
+    let files = match node.stage {
+        Stage::Preview(_) => serde_json::from_slice::<WrittenFile>(&payload).map(|f| vec![f]),
+        _ => serde_json::from_slice::<WrittenOutput>(&payload).map(|w| w.files),
+    };
+    files.is_ok_and(|files| files.iter().all(|f| sink.holds(f)))
 }
