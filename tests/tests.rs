@@ -22,6 +22,7 @@ mod mesh_inputs;
 mod misuse;
 mod model_units;
 mod pieces;
+mod previews;
 mod point_cells;
 mod sdf_cli;
 mod sdf_manifest;

@@ -2,8 +2,8 @@
 //!
 //! Invariants:
 //! - A stage is a pure function of its parameters and its inputs' payloads. Only the write
-//!   stage has an effect, and it reaches files solely through the [`OutputSink`] the CLI gives
-//!   it; stages never open paths themselves.
+//!   and preview stages have an effect, and they reach files solely through the
+//!   [`OutputSink`] the CLI gives them; stages never open paths themselves.
 //! - Everything a stage's result depends on is in its key: kind, version (bump it whenever the
 //!   algorithm changes what it produces), parameters, and its inputs' payload hashes.
 //!

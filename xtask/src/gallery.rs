@@ -10,7 +10,7 @@ use std::path::Path;
 use std::process::Command;
 
 /// The gallery's image size: small enough to commit (tens of KB), big enough to read.
-const SIZE: &str = "[640, 480]";
+const SIZE: &str = "[512, 384]";
 
 /// Examples whose most telling output is not their first by name.
 const CHOSEN: &[(&str, &str)] = &[];

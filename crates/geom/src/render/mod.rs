@@ -97,7 +97,7 @@ impl Spec {
 
     pub fn layout(&self) -> Layout {
         let (width, height) = self.size;
-        let text_scale = if width >= 600 { 2 } else { 1 };
+        let text_scale = if width >= 900 { 2 } else { 1 };
         let lines = self.lines().len().max(1);
         let band = lines * font::CELL.1 * text_scale + 8 * text_scale;
         let panel_height = height.saturating_sub(band).max(1);

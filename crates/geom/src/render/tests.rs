@@ -55,7 +55,7 @@ fn view_pixels(image: &Image, layout: &Layout) -> (usize, usize) {
             let c = image.get(x, y);
             if c != BACKGROUND && c != LABEL {
                 drawn += 1;
-                if c[0] > c[2] + 40 {
+                if i32::from(c[0]) > i32::from(c[2]) + 40 {
                     red += 1;
                 }
             }
