@@ -40,11 +40,11 @@ use crate::graph::{Graph, NodeId};
 use crate::progress::Progress;
 use crate::stages::chunked::{ChunkedMesh, ChunkedWriter, is_chunked};
 use crate::stages::islands::{IslandsFailure, IslandsStage};
-use crate::stages::symmetric::FittedPayload;
 use crate::stages::tile::TileOutput;
 use crate::stages::write::{MeshInput, WriteError};
 use crate::stages::{
-    MeshArtifact, OutputSink, PendingFile, Prewritten, Stage, StageError, WrittenOutput,
+    MeshArtifact, OutputSink, PendingFile, Prewritten, Stage, StageError, WrittenFile,
+    WrittenOutput, warnings,
 };
 
 /// A tile stage's inputs: its cells' payloads, the scaffold file's bytes, the density table.
@@ -71,6 +71,8 @@ pub struct OutputResult {
     pub written: WrittenOutput,
     /// The runs of the nodes this output depends on, in graph order.
     pub stages: Vec<NodeRun>,
+    /// The preview the `preview` node drew (`None` with previews off).
+    pub preview: Option<WrittenFile>,
     /// What the stages before the write found worth saying (an automatic N that stopped at
     /// `max_n` short of its tolerance), read from their payloads, so a cached build says it
     /// too.
@@ -109,6 +111,8 @@ enum Value {
     /// A chunked mesh, left in its cache entry: the open entry and its verified trailer.
     Chunked(Arc<ChunkedMesh<EntryReader>>),
     Written(Arc<WrittenOutput>),
+    /// A preview's record of its file.
+    Preview(Arc<WrittenFile>),
 }
 
 /// Why running a node failed.
@@ -247,8 +251,16 @@ impl<'a> Builder<'a> {
             else {
                 continue;
             };
+            let preview_node = self.graph.previews.get(name).copied();
+            let preview = match preview_node.and_then(|p| self.resolved.get(&p)) {
+                Some(Resolved {
+                    value: Some(Value::Preview(file)),
+                    ..
+                }) => Some((**file).clone()),
+                _ => None,
+            };
             let mut chain = Vec::new();
-            let mut stack = vec![write];
+            let mut stack: Vec<NodeId> = [write].into_iter().chain(preview_node).collect();
             while let Some(id) = stack.pop() {
                 chain.push(id);
                 stack.extend(&self.graph.nodes[id].inputs);
@@ -266,6 +278,7 @@ impl<'a> Builder<'a> {
             results.push(OutputResult {
                 name: name.clone(),
                 written: (*written).clone(),
+                preview,
                 stages,
                 warnings,
             });
@@ -278,35 +291,17 @@ impl<'a> Builder<'a> {
     /// atoms several surfaces fit (the small payload is loaded for it); `None` for every other
     /// node.
     fn node_warning(&mut self, id: NodeId) -> Result<Option<String>, BuildError> {
-        enum Carrier {
-            AutoFit,
-            Optimize,
-            Crystal,
+        let node = &self.graph.nodes[id];
+        if !warnings::carries_warning(&node.stage) {
+            return Ok(None);
         }
-        let (carrier, prefix) = match &self.graph.nodes[id].stage {
-            Stage::Fit(fit) if !fit.reads_samples() => (Carrier::AutoFit, "fit:"),
-            Stage::Constrain(_) => (Carrier::Optimize, "constrain:"),
-            Stage::Crystal(_) => (Carrier::Crystal, "cell:"),
-            _ => return Ok(None),
-        };
         let mut ignore = |_: Key, _: Arc<MeshArtifact>, _: ContentHash| {};
         self.load(id, &mut ignore)?;
+        let node = &self.graph.nodes[id];
         let Some(Value::Bytes(bytes)) = self.resolved.get(&id).and_then(|r| r.value.clone()) else {
             return Ok(None);
         };
-        let node = &self.graph.nodes[id].name;
-        let cell = node.strip_prefix(prefix).unwrap_or(node);
-        let fitted = || FittedPayload::from_bytes(&bytes).ok();
-        let warning = match carrier {
-            Carrier::Crystal => {
-                return Ok(crate::stages::crystal::multiplicity_warning(cell, &bytes));
-            }
-            Carrier::AutoFit => fitted().and_then(|p| p.auto).and_then(|a| a.warning()),
-            Carrier::Optimize => fitted()
-                .and_then(|p| p.optimization)
-                .and_then(|o| o.warning()),
-        };
-        Ok(warning.map(|w| format!("cell `{cell}`: {w}")))
+        Ok(warnings::node_warning(&node.stage, &node.name, &bytes))
     }
 
     /// Builds node `id` and what it needs, and returns its payload (for `latticebuild cell`).
@@ -588,17 +583,23 @@ impl<'a> Builder<'a> {
         let Some(hash) = self.cache.peek_hash(key) else {
             return Ok(CacheStatus::Missing);
         };
-        if !matches!(node.stage, Stage::Write(_)) {
+        if !matches!(node.stage, Stage::Write(_) | Stage::Preview(_)) {
             return Ok(CacheStatus::Fresh { hash, value: None });
         }
-        // A write is only up to date if its files are still there, unchanged.
+        // A write (or preview) is only up to date if its files are still there, unchanged.
         match self.cache.get(key)? {
             Lookup::Hit { payload, hash } => {
-                match serde_json::from_slice::<WrittenOutput>(&payload) {
-                    Ok(written) => match written.files.iter().find(|f| !self.sink.holds(f)) {
+                let record = match node.stage {
+                    Stage::Preview(_) => serde_json::from_slice::<WrittenFile>(&payload)
+                        .map(|file| (vec![file.clone()], Value::Preview(Arc::new(file)))),
+                    _ => serde_json::from_slice::<WrittenOutput>(&payload)
+                        .map(|w| (w.files.clone(), Value::Written(Arc::new(w)))),
+                };
+                match record {
+                    Ok((files, value)) => match files.iter().find(|f| !self.sink.holds(f)) {
                         None => Ok(CacheStatus::Fresh {
                             hash,
-                            value: Some(Value::Written(Arc::new(written))),
+                            value: Some(value),
                         }),
                         Some(f) => Ok(CacheStatus::Stale {
                             why: format!("`{}` is missing or was changed", f.path),
@@ -1029,6 +1030,7 @@ impl<'a> Builder<'a> {
                 Value::Chunked(mesh) => self.run_islands_chunked(node.inputs[0], stage, key, &mesh),
                 _ => Err(StageError::Internal("input is not a mesh".into()).into()),
             },
+            Stage::Preview(stage) => self.run_preview(id, stage),
             Stage::Write(stage) => {
                 let prewritten = self.take_prewritten(id, self.resolved[&node.inputs[0]].hash);
                 let input = match input(0) {
@@ -1055,6 +1057,54 @@ impl<'a> Builder<'a> {
         }
     }
 
+    /// Runs a `preview` node: its inputs are the mesh, the write's record, then the cell
+    /// nodes whose warnings the caption repeats.
+    fn run_preview(
+        &self,
+        id: NodeId,
+        stage: &crate::stages::preview::PreviewStage,
+    ) -> Result<Value, Failure> {
+        let node = &self.graph.nodes[id];
+        let value = |k: usize| self.resolved[&node.inputs[k]].value.clone();
+        let Some(Value::Written(written)) = value(1) else {
+            return Err(StageError::Internal("input 1 is not a write record".into()).into());
+        };
+        let mut cell_warnings = Vec::new();
+        for k in 2..node.inputs.len() {
+            let carrier = &self.graph.nodes[node.inputs[k]];
+            if let Some(Value::Bytes(bytes)) = value(k) {
+                cell_warnings.extend(warnings::node_warning(
+                    &carrier.stage,
+                    &carrier.name,
+                    &bytes,
+                ));
+            }
+        }
+        let drawn = match value(0) {
+            Some(Value::Mesh(mesh)) => {
+                stage.run(MeshInput::Whole(&mesh), &written, &cell_warnings, self.sink)
+            }
+            Some(Value::Chunked(mesh)) => stage.run(
+                MeshInput::Chunked {
+                    chunks: &*mesh,
+                    head: &mesh.trailer.head,
+                },
+                &written,
+                &cell_warnings,
+                self.sink,
+            ),
+            _ => return Err(StageError::Internal("input is not a mesh".into()).into()),
+        };
+        match drawn {
+            Ok(file) => Ok(Value::Preview(Arc::new(file))),
+            Err(WriteError::Failed(error)) => Err(Failure::Failed(error)),
+            Err(WriteError::CorruptInput(reason)) => Err(Failure::CorruptInput {
+                input: node.inputs[0],
+                reason,
+            }),
+        }
+    }
+
     fn store(
         &self,
         key: &Key,
@@ -1074,6 +1124,10 @@ impl<'a> Builder<'a> {
             Value::Chunked(mesh) => mesh.source().hash(),
             Value::Written(written) => {
                 let json = serde_json::to_vec(&**written).expect("written output serializes");
+                self.cache.put(key, &json)?
+            }
+            Value::Preview(file) => {
+                let json = serde_json::to_vec(&**file).expect("a file record serializes");
                 self.cache.put(key, &json)?
             }
         })
@@ -1112,5 +1166,8 @@ fn decode(stage: &Stage, payload: Vec<u8>) -> Option<Value> {
         Stage::Write(_) => serde_json::from_slice(&payload)
             .ok()
             .map(|w| Value::Written(Arc::new(w))),
+        Stage::Preview(_) => serde_json::from_slice(&payload)
+            .ok()
+            .map(|f| Value::Preview(Arc::new(f))),
     }
 }

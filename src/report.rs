@@ -13,8 +13,9 @@ use serde::Serialize;
 
 use crate::build::OutputResult;
 use crate::manifest::Manifest;
-use crate::stages::measure::{Measures, Spread};
-use crate::stages::{Removed, ShellSummary, TilingSummary};
+use crate::stages::measure::Spread;
+use crate::stages::warnings::{self, percent};
+use crate::stages::{Removed, TilingSummary};
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Bbox {
@@ -76,7 +77,7 @@ pub struct Report {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tiling: Option<TilingSummary>,
     /// For a shell: its thinnest wall in sample spacings, or lattice spacings when tiled (see
-    /// [`ShellSummary::thinnest_wall`]).
+    /// [`crate::stages::ShellSummary::thinnest_wall`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub thinnest_wall: Option<f64>,
     /// For a solid sized by `wall`, `grow` or `volume_fraction`: what was asked and, for a
@@ -98,7 +99,7 @@ pub struct Report {
     /// Closed voids sealed inside the solid.
     pub cavities: u64,
     /// What the build found worth saying about this output: more than one piece, a wall
-    /// thinner than [`ShellSummary::THIN_WALL`] sample spacings, an automatic N that stopped
+    /// thinner than [`crate::stages::ShellSummary::THIN_WALL`] sample spacings, an automatic N that stopped
     /// at `max_n` short of its tolerance.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
@@ -144,23 +145,12 @@ impl FailedOutput {
 impl Report {
     pub fn new(manifest: &Manifest, result: &OutputResult) -> Report {
         let s = &result.written.summary;
-        // An SDF output's box is found when it is contoured; a cell output's is the manifest's.
-        let domain = match (result.written.domain, manifest.outputs.get(&result.name)) {
-            (Some([min, max]), _) => Some((min, max)),
-            (None, Some(output)) => Some((output.domain_min, output.domain_max)),
-            (None, None) => None,
-        };
-        let domain_volume: f64 = match &result.written.tiling {
-            Some(tiling) => tiling.scaffold_volume,
-            None => domain.map_or(f64::NAN, |(min, max)| {
-                (0..3).map(|a| max[a] - min[a]).product()
-            }),
-        };
+        let domain = manifest
+            .outputs
+            .get(&result.name)
+            .map(|o| [o.domain_min, o.domain_max]);
         let planar = result.written.planar_element_area.is_some();
-        let volume_fraction = match result.written.planar_element_area {
-            Some(element_area) => s.area / element_area,
-            None => s.volume / domain_volume,
-        };
+        let volume_fraction = warnings::volume_fraction(&result.written, domain);
         let sizing = result.written.sizing.clone();
         let measures = result.written.measures.as_ref();
         let within = manifest
@@ -197,21 +187,8 @@ impl Report {
             components: s.components,
             largest_component_fraction: s.largest_component_fraction,
             removed: s.removed.clone(),
-            warnings: pieces_warning(s.components, s.largest_component_fraction, planar)
+            warnings: warnings::mesh_warnings(&result.written, volume_fraction, within)
                 .into_iter()
-                .chain(
-                    result
-                        .written
-                        .shell
-                        .as_ref()
-                        .and_then(ShellSummary::warning),
-                )
-                .chain(
-                    sizing
-                        .as_ref()
-                        .and_then(|s| fraction_warning(s, volume_fraction, within)),
-                )
-                .chain(measures.into_iter().flat_map(measure_warnings))
                 .chain(result.warnings.iter().cloned())
                 .collect(),
             wall_thickness: measures.and_then(|m| m.wall_thickness),
@@ -227,6 +204,7 @@ impl Report {
                 .written
                 .files
                 .iter()
+                .chain(&result.preview)
                 .map(|f| manifest.out_dir.join(&f.path).display().to_string())
                 .collect(),
             stages: result
@@ -306,74 +284,9 @@ impl Report {
     }
 }
 
-/// A volume fraction asked for and missed by more than [`FRACTION_TOLERANCE`]: the table is
-/// of one period (or element), so a domain that cuts periods or a skin moves it. Within a
-/// part the report's fraction is over the box, not the part: not compared.
-fn fraction_warning(
-    sizing: &crate::stages::artifact::SizingSummary,
-    achieved: f64,
-    within: bool,
-) -> Option<String> {
-    let asked = sizing
-        .target
-        .filter(|_| sizing.by == "volume_fraction" && !within)?;
-    ((achieved - asked).abs() > FRACTION_TOLERANCE).then(|| {
-        format!(
-            "the volume fraction is {achieved:.4}, not the {asked} asked: it was solved over one \
-             period of the cell (or its reference element), which a domain that cuts periods, a \
-             skin, or elements that are not affine images of the reference element change"
-        )
-    })
-}
-
-/// How far a built volume fraction may be from the one asked before the report says so.
-pub const FRACTION_TOLERANCE: f64 = 0.01;
-
 /// Area over volume for a solid of positive, finite volume.
-/// Sealed cavities, and local thickness that was asked for and not measured. (No warning is
-/// drawn from the thickness figures themselves: their low percentiles hold the voxels at the
-/// part's cut edges, where local thickness goes to zero by definition.)
-fn measure_warnings(m: &Measures) -> impl Iterator<Item = String> + '_ {
-    let cavities = (m.cavities > 0).then(|| {
-        format!(
-            "{} sealed {} inside the solid: powder or resin stays trapped there (a skin or \
-             a cap closes the lattice off; open it with a drain hole, or leave the skin out)",
-            m.cavities,
-            if m.cavities == 1 {
-                "cavity"
-            } else {
-                "cavities"
-            }
-        )
-    });
-    let missing = m
-        .not_measured
-        .as_ref()
-        .map(|why| format!("wall thickness and pore size not measured: {why}"));
-    cavities.into_iter().chain(missing)
-}
-
 fn specific_surface(area: f64, volume: f64, planar: bool) -> Option<f64> {
     (!planar && volume > 0.0 && volume.is_finite() && area.is_finite()).then(|| area / volume)
-}
-
-/// The warning for a mesh of more than one piece, with the largest piece's share.
-fn pieces_warning(components: u64, largest: f64, planar: bool) -> Option<String> {
-    (components > 1).then(|| {
-        // A planar region cannot drop pieces (their drawing would keep them).
-        let remedy = if planar {
-            "check the sizing or the cell's fit"
-        } else {
-            "check the sizing or the cell's fit, or drop them with `keep = \"largest\"` or \
-             `min_island_volume`"
-        };
-        format!(
-            "the mesh is {components} separate pieces; the largest holds {} of the {}: loose \
-             pieces fall out of a print ({remedy})",
-            percent(largest),
-            if planar { "area" } else { "volume" }
-        )
-    })
 }
 
 /// What the summary line says `keep`/`min_island_volume` removed.
@@ -382,18 +295,6 @@ fn removed_text(r: &Removed) -> String {
         0 => "no loose pieces removed".into(),
         1 => format!("1 loose piece removed (volume {:.4e})", r.volume),
         n => format!("{n} loose pieces removed (volume {:.4e})", r.volume),
-    }
-}
-
-/// A fraction as a percentage with two significant decimals where small (`0.3 %`, `97 %`).
-fn percent(fraction: f64) -> String {
-    let p = 100.0 * fraction;
-    if p >= 10.0 {
-        format!("{p:.0} %")
-    } else if p >= 1.0 {
-        format!("{p:.1} %")
-    } else {
-        format!("{p:.2} %")
     }
 }
 
@@ -416,7 +317,7 @@ fn defects(watertight: bool, manifold: bool, planar: bool) -> Vec<String> {
 
 #[cfg(test)]
 mod tests {
-    use super::{defects, percent, pieces_warning, specific_surface};
+    use super::{defects, specific_surface};
 
     #[test]
     fn specific_surface_is_area_over_volume_of_a_solid() {
@@ -433,21 +334,6 @@ mod tests {
             "a planar region has no volume"
         );
         assert_eq!(specific_surface(f64::NAN, 1.0, false), None);
-    }
-
-    #[test]
-    fn more_than_one_piece_is_a_warning_with_the_largest_share() {
-        assert_eq!(pieces_warning(1, 1.0, false), None);
-        let warning = pieces_warning(5166, 0.003, false).expect("warned");
-        assert!(
-            warning.starts_with(
-                "the mesh is 5166 separate pieces; the largest holds 0.30 % of the volume"
-            ),
-            "{warning}"
-        );
-        assert!(pieces_warning(2, 0.6, true).is_some_and(|w| w.contains("60 % of the area")));
-        assert_eq!(percent(0.5), "50 %");
-        assert_eq!(percent(0.0123), "1.2 %");
     }
 
     #[test]

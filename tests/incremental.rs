@@ -180,9 +180,10 @@ fn graph_marks_cached_and_stale_nodes() {
     assert!(before.lines().all(|l| l.contains("stale")), "{before}");
     p.build(&[]);
     let after = String::from_utf8(p.run(&["graph", "lattice.toml"]).stdout).expect("utf8");
+    // Two cells, two contours, two writes and two previews.
     assert_eq!(
         after.lines().filter(|l| l.contains("cached")).count(),
-        6,
+        8,
         "{after}"
     );
     let changed = p.run(&["graph", "lattice.toml", "--set", "outputs.a.samples=33"]);

@@ -26,6 +26,7 @@ mod misuse;
 mod model_units;
 mod pieces;
 mod point_cells;
+mod previews;
 mod sdf_cli;
 mod sdf_manifest;
 mod serve;

@@ -39,6 +39,9 @@ pub struct BuildArgs {
     /// Build even when the estimated memory or disk use exceeds what the machine has
     #[arg(long)]
     pub allow_large: bool,
+    /// Draw no `NAME.png` previews (as `[build] previews = false`): for optimisation loops
+    #[arg(long)]
+    pub no_previews: bool,
 }
 
 /// What a build produced, for `watch --serve`: the reports and the stage graph it ran.
@@ -57,7 +60,10 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
 /// [`run_build`], also leaving what it built in `built` once every report is written (even
 /// when it then fails over defective meshes).
 pub fn run_build_keeping(args: &BuildArgs, built: &mut Option<Built>) -> Result<(), Failure> {
-    let manifest = load_manifest(&args.manifest)?;
+        let mut manifest = load_manifest(&args.manifest)?;
+    if args.no_previews {
+        manifest.previews = false;
+    }
     crate::files::check_report_path(args.report.as_deref(), &manifest).map_err(Failure::Usage)?;
     let graph = compile(&manifest)?;
     if let Err(unknown) = graph.needed(&args.targets) {

@@ -21,11 +21,13 @@ use crate::stages::file::FileStage;
 use crate::stages::islands::IslandsStage;
 use crate::stages::mesh::MeshCellStage;
 use crate::stages::points::PointCellStage;
+use crate::stages::preview::PreviewStage;
 use crate::stages::program::ProgramStage;
 use crate::stages::sizing::{DensityStage, Over};
 use crate::stages::symmetric::{Combination, CombineStage, ConstrainStage, FitStage, SampleStage};
 use crate::stages::tile::TileStage;
 use crate::stages::voxels::VoxelCellStage;
+use crate::stages::warnings;
 use crate::stages::write::{self, WriteStage};
 use latticebuild_geom::mesh_io::Units;
 
@@ -51,6 +53,8 @@ pub struct Graph {
     pub nodes: Vec<Node>,
     /// For each output name, its final (`write`) node.
     pub outputs: BTreeMap<String, NodeId>,
+    /// For each output name, its `preview` node (none with previews off).
+    pub previews: BTreeMap<String, NodeId>,
 }
 
 /// Compiles cells into nodes once each, following blends and Minkowski combinations.
@@ -202,6 +206,24 @@ impl CellCompiler<'_> {
     }
 }
 
+/// Output `name`'s preview stage, when the manifest draws previews.
+fn preview(
+    manifest: &Manifest,
+    name: &str,
+    stem: &str,
+    domain: Option<[[f64; 3]; 2]>,
+    within: bool,
+) -> Option<PreviewStage> {
+    manifest.previews.then(|| PreviewStage {
+        output: name.to_string(),
+        stem: stem.to_string(),
+        size: manifest.preview_size,
+        domain,
+        within,
+        carriers: Vec::new(),
+    })
+}
+
 /// A dependency cycle, as the path of node names that closes it.
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
 #[error("dependency cycle: {}", .0.join(" → "))]
@@ -253,7 +275,15 @@ impl Graph {
             ];
             let stamp = write::stamp(name, &manifest.units, parameters);
             let write = WriteStage::new(output, manifest.report, stamp);
-            graph.finish_output(name, &output.islands, contour, write);
+            let domain = Some([output.domain_min, output.domain_max]);
+            let preview = preview(
+                manifest,
+                name,
+                &output.stem,
+                domain,
+                output.within.is_some(),
+            );
+            graph.finish_output(name, &output.islands, contour, write, preview);
         }
         // An SDF output: `sdf` reading a `file:` node per mesh of its program, then `write`.
         for (name, output) in &manifest.program_outputs {
@@ -278,7 +308,8 @@ impl Graph {
                     ],
                 ),
             };
-            graph.finish_output(name, &output.islands, solid, write);
+            let preview = preview(manifest, name, &output.stem, None, false);
+            graph.finish_output(name, &output.islands, solid, write, preview);
         }
         // A tiled output: `tile` reading its cells' `constrain` nodes (and the scaffold's
         // `file:` node), then `write`.
@@ -315,7 +346,8 @@ impl Graph {
                     ],
                 ),
             };
-            graph.finish_output(name, &output.islands, tiled, write);
+            let preview = preview(manifest, name, &output.stem, None, false);
+            graph.finish_output(name, &output.islands, tiled, write, preview);
         }
         graph.check_order()?;
         Ok(graph)
@@ -360,17 +392,35 @@ impl Graph {
     /// it when the output removes pieces (only then, so outputs without the keys keep the
     /// graph, keys and cache entries they had).
     /// An output's last nodes after the one making its mesh: `islands` when it removes loose
-    /// pieces, then `write`, which becomes the output's target.
+    /// pieces, then `write`, which becomes the output's target, and `preview` (reading the
+    /// mesh, the write's record and the cell nodes whose warnings its caption repeats).
     fn finish_output(
         &mut self,
         name: &str,
         filter: &IslandFilter,
         mesh: NodeId,
         write: WriteStage,
+        preview: Option<PreviewStage>,
     ) {
         let mesh = self.islands(name, filter, mesh);
+        // `formats = []` writes no file at all, so no preview either.
+        let preview = preview.filter(|_| !write.formats.is_empty());
         let write = self.push(format!("write:{name}"), Stage::Write(write), vec![mesh]);
         self.outputs.insert(name.to_string(), write);
+        if let Some(mut preview) = preview {
+            let carriers: Vec<NodeId> = self
+                .closure(&[mesh])
+                .into_iter()
+                .filter(|&id| warnings::carries_warning(&self.nodes[id].stage))
+                .collect();
+            preview.carriers = carriers
+                .iter()
+                .map(|&id| self.nodes[id].name.clone())
+                .collect();
+            let inputs = [mesh, write].into_iter().chain(carriers).collect();
+            let node = self.push(format!("preview:{name}"), Stage::Preview(preview), inputs);
+            self.previews.insert(name.to_string(), node);
+        }
     }
 
     fn islands(&mut self, name: &str, filter: &IslandFilter, mesh: NodeId) -> NodeId {
@@ -438,11 +488,16 @@ impl Graph {
         if !unknown.is_empty() {
             return Err(unknown);
         }
-        let roots: Vec<NodeId> = if targets.is_empty() {
-            self.outputs.values().copied().collect()
+        let names: Vec<&String> = if targets.is_empty() {
+            self.outputs.keys().collect()
         } else {
-            targets.iter().map(|t| self.outputs[t]).collect()
+            targets.iter().collect()
         };
+        let roots: Vec<NodeId> = names
+            .into_iter()
+            .flat_map(|t| [Some(self.outputs[t]), self.previews.get(t).copied()])
+            .flatten()
+            .collect();
         Ok(self.closure(&roots))
     }
 

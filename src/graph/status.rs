@@ -14,7 +14,7 @@ use serde::Serialize;
 
 use super::{Graph, NodeId};
 use crate::cache::{Cache, ContentHash, Lookup, explain};
-use crate::stages::{OutputSink, Stage, WrittenOutput};
+use crate::stages::{OutputSink, Stage, WrittenFile, WrittenOutput};
 
 /// One node's state, as every form prints it.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -136,15 +136,17 @@ fn write_is_current(
     key: &crate::cache::Key,
     sink: &dyn OutputSink,
 ) -> bool {
-    if !matches!(node.stage, Stage::Write(_)) {
-        return true;
-    }
-    match cache.get(key) {
-        Ok(Lookup::Hit { payload, .. }) => serde_json::from_slice::<WrittenOutput>(&payload)
-            .map(|w| w.files.iter().all(|f| sink.holds(f)))
-            .unwrap_or(false),
-        _ => false,
-    }
+    let Ok(Lookup::Hit { payload, .. }) = (match node.stage {
+        Stage::Write(_) | Stage::Preview(_) => cache.get(key),
+        _ => return true,
+    }) else {
+        return false;
+    };
+    let files = match node.stage {
+        Stage::Preview(_) => serde_json::from_slice::<WrittenFile>(&payload).map(|f| vec![f]),
+        _ => serde_json::from_slice::<WrittenOutput>(&payload).map(|w| w.files),
+    };
+    files.is_ok_and(|files| files.iter().all(|f| sink.holds(f)))
 }
 
 #[cfg(test)]

@@ -25,6 +25,11 @@ pub struct Manifest {
     pub units: String,
     /// How much each report measures (`[build] report`, default `"full"`).
     pub report: crate::stages::measure::ReportLevel,
+    /// Whether each output gets a PNG preview (`[build] previews`, default true;
+    /// `--no-previews` turns them off).
+    pub previews: bool,
+    /// The previews' width and height in pixels (`[build] preview_size`).
+    pub preview_size: [u32; 2],
     pub cells: BTreeMap<String, Cell>,
     pub outputs: BTreeMap<String, Output>,
     /// Outputs whose solid is an SDF program (`sdf = "…"`); their names differ from those of

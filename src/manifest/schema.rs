@@ -36,6 +36,7 @@ mod keys;
 mod meshes;
 mod optimize;
 pub(crate) mod output_files;
+mod previews;
 mod program;
 mod scaffolds;
 mod sizing;
@@ -54,6 +55,14 @@ struct WrittenFiles {
     stem: String,
 }
 type Value<'i> = Spanned<DeValue<'i>>;
+
+/// `[build]`'s out_dir, units, report level, and previews (on, size).
+type BuildSection = (
+    Option<String>,
+    Option<String>,
+    Option<ReportLevel>,
+    Option<(bool, [u32; 2])>,
+);
 
 /// The length units `[build] units` accepts: what the model's numbers mean (reports echo it).
 pub(crate) const UNITS: [&str; 5] = ["mm", "cm", "m", "um", "in"];
@@ -95,12 +104,13 @@ pub(crate) fn validate(
     let mut units = Some("mm".to_string());
     let mut report_level = Some(ReportLevel::default());
     let mut cache_max_size = Some(cache::DEFAULT_MAX_SIZE);
+    let mut previews = Some((true, crate::stages::preview::DEFAULT_SIZE));
     let mut cells_table = None;
     let mut scaffolds_table = None;
     let mut outputs_table = None;
     for (key, value) in root {
         match key.get_ref().as_ref() {
-            "build" => (out_dir, units, report_level) = checker.build(value),
+            "build" => (out_dir, units, report_level, previews) = checker.build(value),
             "cache" => cache_max_size = checker.cache(value),
             "cells" => {
                 cells_table = checker.table("cells", value, "define cells as `[cells.NAME]` tables")
@@ -191,6 +201,8 @@ pub(crate) fn validate(
         out_dir,
         units: units?,
         report: report_level?,
+        previews: previews?.0,
+        preview_size: previews?.1,
         root: dir,
         inputs,
         cells,
@@ -236,14 +248,11 @@ struct Checker<'r, 's, 'a> {
 impl Checker<'_, '_, '_> {
     // ---- sections ------------------------------------------------------------------------
 
-    /// `[build]`: the output directory, the length units and the report level (`None` each
-    /// where invalid).
-    fn build(
-        &mut self,
-        value: &Value<'_>,
-    ) -> (Option<String>, Option<String>, Option<ReportLevel>) {
+    /// `[build]`: the output directory, the length units, the report level and the previews
+    /// (`None` each where invalid).
+    fn build(&mut self, value: &Value<'_>) -> BuildSection {
         let Some(table) = self.table("build", value, "write it as a `[build]` table") else {
-            return (None, None, None);
+            return (None, None, None, None);
         };
         let fields = self.fields(table, &BUILD_KEYS, "in `[build]`");
         let units = match fields.get("units") {
@@ -254,10 +263,12 @@ impl Checker<'_, '_, '_> {
             None => Some(ReportLevel::default()),
             Some((_, value)) => self.report_level(value),
         };
+        let previews = self.previews(&fields);
         (
             self.out_dir(fields.get("out_dir").map(|(_, v)| *v)),
             units,
             report,
+            previews,
         )
     }
 

@@ -506,6 +506,8 @@ fn defaults_are_filled_in() {
         out_dir: PathBuf::from("parts/out"),
         units: "mm".into(),
         report: crate::stages::measure::ReportLevel::Full,
+        previews: true,
+        preview_size: [1024, 768],
         cells: BTreeMap::from([(
             "gyroid".to_string(),
             Cell {

@@ -2,8 +2,8 @@
 //!
 //! Invariants:
 //! - A stage is a pure function of its parameters and its inputs' payloads. Only the write
-//!   stage has an effect, and it reaches files solely through the [`OutputSink`] the CLI gives
-//!   it; stages never open paths themselves.
+//!   and preview stages have an effect, and they reach files solely through the
+//!   [`OutputSink`] the CLI gives them; stages never open paths themselves.
 //! - Everything a stage's result depends on is in its key: kind, version (bump it whenever the
 //!   algorithm changes what it produces), parameters, and its inputs' payload hashes.
 //!
@@ -24,6 +24,7 @@
 //! | `sdf`     | canonical program (paths as input numbers), bounds, samples or voxel | the `file` words' bytes | mesh + its check + the box |
 //! | `islands` | keep, min_island_volume                                 | contour, sdf or tile payload | the kept mesh + its check + what was removed ([`islands`]) |
 //! | `write`   | formats, encoding, path stem                            | contour payload| files written and the mesh summary (JSON) |
+//! | `preview` | output name, path stem, size, domain, within            | mesh, write record, warning cells | the PNG written (JSON) |
 
 pub mod artifact;
 pub mod cell;
@@ -36,11 +37,13 @@ pub mod islands;
 pub mod measure;
 pub mod mesh;
 pub mod points;
+pub mod preview;
 pub mod program;
 pub mod sizing;
 pub mod symmetric;
 pub mod tile;
 pub mod voxels;
+pub mod warnings;
 pub mod write;
 
 use crate::cache::{ContentHash, Key, KeyBuilder, KeyDescription, KeyError};
@@ -71,6 +74,7 @@ pub enum Stage {
     Tile(tile::TileStage),
     Islands(islands::IslandsStage),
     Write(write::WriteStage),
+    Preview(preview::PreviewStage),
 }
 
 impl Stage {
@@ -101,6 +105,7 @@ impl Stage {
             Stage::Tile(_) => "tile",
             Stage::Islands(_) => "islands",
             Stage::Write(_) => "write",
+            Stage::Preview(_) => "preview",
         }
     }
 
@@ -122,6 +127,7 @@ impl Stage {
             Stage::Tile(_) => tile::VERSION,
             Stage::Islands(_) => islands::VERSION,
             Stage::Write(_) => write::VERSION,
+            Stage::Preview(_) => preview::VERSION,
         }
     }
 
@@ -145,6 +151,7 @@ impl Stage {
             Stage::Tile(s) => s.key_params(builder),
             Stage::Islands(s) => s.key_params(builder),
             Stage::Write(s) => s.key_params(builder),
+            Stage::Preview(s) => s.key_params(builder),
         };
         let builder = inputs
             .iter()
@@ -175,6 +182,12 @@ impl Stage {
             Stage::Tile(s) if i == s.cell_inputs() && s.reads_file() => "scaffold".into(),
             Stage::Tile(_) => "density table".into(),
             Stage::Islands(_) | Stage::Write(_) => "mesh".into(),
+            Stage::Preview(_) if i == 0 => "mesh".into(),
+            Stage::Preview(_) if i == 1 => "files".into(),
+            Stage::Preview(s) => format!(
+                "{} (its warnings)",
+                s.carriers.get(i - 2).map_or("?", |c| c.as_str())
+            ),
         }
     }
 }

@@ -1,4 +1,4 @@
-//! `cargo xtask bench geom [expr|mesh-io|periodic|scaffold|symmetric|auto-mesh|validate|constrain|measure]…`:
+//! `cargo xtask bench geom [expr|mesh-io|periodic|scaffold|symmetric|auto-mesh|validate|constrain|measure|preview]…`:
 //! timings of the geometry crate's kernels, printed with their targets (what used to be the
 //! `#[ignore]`d `*_timing` tests of `crates/geom/tests`). No names: all of them.
 //!
@@ -25,6 +25,7 @@ const ALL: &[(&str, Bench)] = &[
     ("validate", validate),
     ("constrain", constrain),
     ("measure", measure),
+    ("preview", preview),
 ];
 
 pub fn run(args: &[String]) -> Result<(), String> {
@@ -579,4 +580,45 @@ fn measure() -> Result<(), String> {
         topology
     );
     Ok(())
+}
+
+/// A 1024 × 768 preview (view, section, caption, PNG) of the torus of [`validate`].
+fn preview() -> Result<(), String> {
+    use latticebuild_geom::render::{Line, Preview, Spec};
+
+    let mesh = big_torus()?;
+    let check = latticebuild_geom::validate::check(&mesh);
+    let spec = Spec {
+        size: (1024, 768),
+        bbox: [check.bbox_min, check.bbox_max],
+        cut: Some((check.bbox_min[2] + check.bbox_max[2]) / 2.0),
+        caption: vec![Line {
+            text: format!("torus: {} triangles", mesh.triangles.len()),
+            warning: false,
+        }],
+    };
+    let mut best = f64::INFINITY;
+    for _ in 0..3 {
+        let start = Instant::now();
+        let mut preview = Preview::new(spec.clone());
+        preview
+            .add_mesh(&mesh)
+            .map_err(|i| format!("triangle {i} out of range"))?;
+        let drawn = start.elapsed().as_secs_f64();
+        let image = preview.finish();
+        let mut png = Vec::new();
+        image.write_png(&mut png).map_err(|e| e.to_string())?;
+        let seconds = start.elapsed().as_secs_f64();
+        best = best.min(seconds);
+        println!(
+            "{} triangles: drawn {drawn:.3} s, with section fill and PNG {seconds:.3} s ({} KB)",
+            mesh.triangles.len(),
+            png.len() / 1024
+        );
+    }
+    let per_million = best / (mesh.triangles.len() as f64 / 1e6);
+    println!("best: {best:.3} s ({per_million:.3} s per million triangles)");
+    ensure(per_million <= 2.0, || {
+        format!("preview far slower than expected: {per_million:.3} s per million triangles")
+    })
 }

@@ -2,6 +2,7 @@
 //! [--no-peers] [--field separable|dense]`, `cargo xtask bench geom [NAME…]` (see
 //! `bench_geom.rs`), `cargo xtask bench-mesh [triangles] [samples]`,
 //! `cargo xtask bench-tile [--resolution N] [--formats stl,ply] [--keep]`,
+//! `cargo xtask gallery` (the README's previews, see `gallery.rs`),
 //! `cargo xtask codegen [--check]`, `cargo xtask fuzz [--minutes M] [TARGET…]` (see
 //! `fuzz/mod.rs`; `--list`, `--replay`), `cargo xtask man [DIR]` (see `man.rs`),
 //! `cargo xtask vendor-web` (see `vendor_web.rs`).
@@ -15,6 +16,7 @@ mod bench_tile;
 mod fuzz;
 mod man;
 mod vendor_web;
+mod gallery;
 
 /// Counts live heap bytes so that the fuzz runner can bound them (see `fuzz/bound.rs`).
 #[global_allocator]
@@ -31,6 +33,7 @@ fn main() -> ExitCode {
         Some("bench") => bench(&args[1..]),
         Some("bench-mesh") => bench_mesh::run(&args[1..]),
         Some("bench-tile") => bench_tile::run(&args[1..]),
+        Some("gallery") => gallery::run(),
         Some("codegen") => codegen(args.iter().any(|a| a == "--check")),
         Some("fuzz") => fuzz::run(&args[1..]),
         Some("man") => man::run(&args[1..]),
@@ -43,7 +46,7 @@ fn main() -> ExitCode {
         _ => Err(
             "usage: cargo xtask golden [--bless] | bench [--sizes 200,400,800] [--no-peers] \
                   [--field separable|dense] | bench geom [expr|mesh-io|periodic|scaffold|symmetric|validate|constrain|measure]… | bench-mesh [triangles] [samples] | bench-tile \
-                  [--resolution N] [--formats stl,ply] [--keep] | codegen [--check] | fuzz \
+                  [--resolution N] [--formats stl,ply] [--keep] | gallery | codegen [--check] | fuzz \
                   [--minutes M] [--seed N] [TARGET…] | fuzz --list | fuzz --replay | man [DIR] | vendor-web"
                 .to_string(),
         ),
@@ -274,11 +277,12 @@ fn bench(args: &[String]) -> Result<(), String> {
     println!(
         "gyroid, domain [-1,1]^3, cell_size 1, solid inside, binary PLY; cold builds (cache cleaned);\n\
          `seconds` with report = \"basic\" (what the peers do), `full` the same cold build with the\n\
-         full report (wall thickness and pore size measured)"
+         full report (wall thickness and pore size measured); `preview s` the preview stage's\n\
+         time within `seconds` (its share of the build)"
     );
     println!(
-        "{:>5} {:>10} {:>10} {:>12} {:>10} {:>10} | peers ({field} field): seconds, peak MiB, ratio to latticebuild",
-        "N", "seconds", "peak MiB", "triangles", "full s", "full MiB"
+        "{:>5} {:>10} {:>10} {:>12} {:>10} {:>10} {:>10} | peers ({field} field): seconds, peak MiB, ratio to latticebuild",
+        "N", "seconds", "peak MiB", "triangles", "full s", "full MiB", "preview s"
     );
     for &n in &sizes {
         let manifest = scratch.join(format!("gyroid{n}.toml"));
@@ -296,6 +300,22 @@ fn bench(args: &[String]) -> Result<(), String> {
         let ours = timed(Command::new(&bin).arg("build").arg(&manifest).arg("-q"))?;
         let report = std::fs::read_to_string(scratch.join(format!("out/g{n}.report.json")))
             .unwrap_or_default();
+        // The preview stage's share of the build (from the report's stage timings).
+        let stages: Vec<(String, f64)> = serde_json::from_str::<serde_json::Value>(&report)
+            .ok()
+            .and_then(|r| r["stages"].as_array().cloned())
+            .unwrap_or_default()
+            .iter()
+            .map(|s| {
+                let name = s["stage"].as_str().unwrap_or("").to_string();
+                (name, s["seconds"].as_f64().unwrap_or(0.0))
+            })
+            .collect();
+        let preview: f64 = stages
+            .iter()
+            .filter(|(name, _)| name.starts_with("preview:"))
+            .map(|(_, s)| s)
+            .sum();
         let triangles = report
             .lines()
             .find_map(|l| {
@@ -319,12 +339,13 @@ fn bench(args: &[String]) -> Result<(), String> {
                 .args(["--set", "build.report=full"]),
         )?;
         let mut line = format!(
-            "{n:>5} {:>10.3} {:>10.0} {:>12} {:>10.3} {:>10.0} |",
+            "{n:>5} {:>10.3} {:>10.0} {:>12} {:>10.3} {:>10.0} {:>10} |",
             ours.seconds,
             ours.peak_kib as f64 / 1024.0,
             triangles,
             full.seconds,
             full.peak_kib as f64 / 1024.0,
+            format!("{preview:.3} ({:.1}%)", 100.0 * preview / ours.seconds),
         );
         if peers {
             for peer in ["vtk_flyingedges", "pymcubes", "skimage"] {

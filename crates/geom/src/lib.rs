@@ -25,6 +25,7 @@ pub mod mesh_read;
 pub mod mesh_sdf;
 pub mod periodic;
 pub mod point_cloud;
+pub mod render;
 pub mod scaffold;
 mod scalar;
 mod simplex_contour;

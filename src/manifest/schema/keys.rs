@@ -11,7 +11,7 @@
 
 pub(super) const TOP_KEYS: [&str; 5] = ["build", "cache", "cells", "scaffolds", "outputs"];
 
-pub(super) const BUILD_KEYS: [&str; 3] = ["out_dir", "units", "report"];
+pub(super) const BUILD_KEYS: [&str; 5] = ["out_dir", "units", "report", "previews", "preview_size"];
 
 pub(super) const CACHE_KEYS: [&str; 1] = ["max_size"];
 

@@ -37,12 +37,16 @@ fn is_planar(cells: &BTreeMap<String, Cell>, cell: &str) -> bool {
     }
 }
 
-/// Every output's files, relative to `out_dir` and normalised, in order of output kind and name.
+/// Every output's files (formats, a region's drawing, the preview), relative to `out_dir` and
+/// normalised, in order of output kind and name.
 pub(crate) fn files_by_output(manifest: &Manifest) -> Vec<(&str, Vec<String>)> {
     let files = |stem: &str, formats: &[Format], planar: bool| -> Vec<String> {
         let stem = normalise(stem);
-        let svg = (planar && !formats.is_empty()).then_some("svg");
-        let extensions = formats.iter().map(|f| f.name()).chain(svg);
+        // `formats = []` writes no file at all: no region drawing, no preview.
+        let writes = !formats.is_empty();
+        let svg = (planar && writes).then_some("svg");
+        let png = (manifest.previews && writes).then_some("png");
+        let extensions = formats.iter().map(|f| f.name()).chain(svg).chain(png);
         extensions.map(|ext| format!("{stem}.{ext}")).collect()
     };
     let plain = manifest.outputs.iter().map(|(name, o)| {

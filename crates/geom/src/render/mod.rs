@@ -1,0 +1,343 @@
+//! Preview images of meshes: a headless software render, with no GPU and no display.
+//!
+//! A preview is an isometric view of the mesh ([`raster`]: z-buffered, flat-shaded by two
+//! lights, faces seen from behind tinted red) beside its section by the plane through the
+//! middle of its box ([`section`]: the cut region filled, pores empty), over a caption band
+//! of text lines ([`font`]). A planar region (a 2D output) is drawn alone, seen from above.
+//!
+//! Invariants:
+//! - The image is a pure function of the [`Spec`] and of the sequence of triangles added,
+//!   the same bytes for any thread count (see [`raster`] and [`section`]).
+//! - Triangles may be added in any number of calls (a tiling's chunks, streamed): the result
+//!   is that of adding them all at once, so a mesh is never needed whole in memory.
+//! - PNG bytes come from the `png` crate at fixed settings: same pixels, same bytes.
+
+pub mod font;
+pub mod raster;
+pub mod section;
+
+use std::io::{self, Write};
+
+use crate::mesh::{Mesh, MeshChunk};
+use raster::{Camera, Raster, Rgb};
+use section::Section;
+
+const BACKGROUND: Rgb = [250, 250, 250];
+const CAPTION_BACKGROUND: Rgb = [32, 34, 40];
+const TITLE: Rgb = [240, 240, 240];
+const WARNING: Rgb = [255, 190, 70];
+const LABEL: Rgb = [120, 120, 130];
+/// The section's solid, and the frame of the box it is cut from.
+pub const CUT: Rgb = [60, 92, 150];
+const FRAME: Rgb = [200, 200, 205];
+/// Warnings shown (one line each, cut to the width); more are counted on the last line.
+const MAX_WARNINGS: usize = 4;
+/// The share of a panel the drawing fills.
+const FILL: f64 = 0.86;
+
+/// One line of the caption.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Line {
+    pub text: String,
+    pub warning: bool,
+}
+
+/// What to draw.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Spec {
+    /// Width and height in pixels.
+    pub size: (usize, usize),
+    /// The box the views are fitted to (the mesh's).
+    pub bbox: [[f64; 3]; 2],
+    /// `Some(z0)`: isometric view and the section at `z = z0`; `None`: a planar region, seen
+    /// from above.
+    pub cut: Option<f64>,
+    /// The caption: a title line, then warnings.
+    pub caption: Vec<Line>,
+}
+
+/// An RGB image, row by row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: usize,
+    pub height: usize,
+    pub rgb: Vec<Rgb>,
+}
+
+/// Where things go in the image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Layout {
+    /// The text's scale (pixels per font pixel).
+    pub text_scale: usize,
+    /// The panels' height (the caption band is below).
+    pub panel_height: usize,
+    /// The view's panel `(x0, width)`, and the section's.
+    pub view: (usize, usize),
+    pub section: Option<(usize, usize)>,
+}
+
+impl Spec {
+    /// The caption's lines as drawn: the title, then at most [`MAX_WARNINGS`] warnings (the
+    /// last saying how many more there were).
+    pub fn lines(&self) -> Vec<Line> {
+        let mut lines: Vec<Line> = self
+            .caption
+            .iter()
+            .take(1 + MAX_WARNINGS)
+            .cloned()
+            .collect();
+        let hidden = self.caption.len().saturating_sub(1 + MAX_WARNINGS);
+        if hidden > 0
+            && let Some(last) = lines.last_mut()
+        {
+            last.text = format!("(+{} more warnings) {}", hidden + 1, last.text);
+        }
+        lines
+    }
+
+    pub fn layout(&self) -> Layout {
+        let (width, height) = self.size;
+        let text_scale = if width >= 900 { 2 } else { 1 };
+        let lines = self.lines().len().max(1);
+        let band = lines * font::CELL.1 * text_scale + 8 * text_scale;
+        let panel_height = height.saturating_sub(band).max(1);
+        let (view, section) = match self.cut {
+            Some(_) => ((0, width / 2), Some((width / 2, width - width / 2))),
+            None => ((0, width), None),
+        };
+        Layout {
+            text_scale,
+            panel_height,
+            view,
+            section,
+        }
+    }
+}
+
+/// A preview being drawn: add the mesh's triangles, then [`Preview::finish`].
+pub struct Preview {
+    spec: Spec,
+    layout: Layout,
+    view: Raster,
+    section: Option<Section>,
+}
+
+impl Preview {
+    pub fn new(spec: Spec) -> Preview {
+        let layout = spec.layout();
+        let h = layout.panel_height;
+        let (toward, up) = match spec.cut {
+            // Isometric, from +x −y +z, z up.
+            Some(_) => ([1.0, -1.0, 1.0], [0.0, 0.0, 1.0]),
+            None => ([0.0, 0.0, 1.0], [0.0, 1.0, 0.0]),
+        };
+        let camera = Camera::fit(toward, up, spec.bbox, (layout.view.1, h), FILL);
+        let view = Raster::new(camera, (layout.view.1, h), BACKGROUND);
+        let section = match (spec.cut, layout.section) {
+            (Some(z0), Some((_, w))) => Some(Section::new(z0, spec.bbox, (w, h), FILL)),
+            _ => None,
+        };
+        Preview {
+            spec,
+            layout,
+            view,
+            section,
+        }
+    }
+
+    pub fn layout(&self) -> Layout {
+        self.layout
+    }
+
+    /// The view's camera (in its panel's pixels).
+    pub fn camera(&self) -> Camera {
+        self.view.camera
+    }
+
+    /// Adds `count` triangles, triangle `i` with corners `corners(i)`; `Err(i)` when one cannot
+    /// be resolved.
+    pub fn add(
+        &mut self,
+        count: usize,
+        corners: &(dyn Fn(usize) -> Option<[[f32; 3]; 3]> + Sync),
+    ) -> Result<(), usize> {
+        self.view.add(count, corners)?;
+        if let Some(section) = &mut self.section {
+            section.add(count, corners)?;
+        }
+        Ok(())
+    }
+
+    /// Adds a whole mesh.
+    pub fn add_mesh(&mut self, mesh: &Mesh) -> Result<(), usize> {
+        let corners = |i: usize| {
+            let t = mesh.triangles.get(i)?;
+            let mut c = [[0.0f32; 3]; 3];
+            for k in 0..3 {
+                c[k] = *mesh.vertices.get(t[k] as usize)?;
+            }
+            Some(c)
+        };
+        self.add(mesh.triangles.len(), &corners)
+    }
+
+    /// Adds a chunk's triangles (corners resolved through the chunk's own and borrowed
+    /// vertices).
+    pub fn add_chunk(&mut self, chunk: &MeshChunk) -> Result<(), usize> {
+        let corners = |i: usize| {
+            let t = chunk.triangles.get(i)?;
+            let mut c = [[0.0f32; 3]; 3];
+            for k in 0..3 {
+                c[k] = chunk.position(t[k])?;
+            }
+            Some(c)
+        };
+        self.add(chunk.triangles.len(), &corners)
+    }
+
+    /// The finished image.
+    pub fn finish(mut self) -> Image {
+        let (width, height) = self.spec.size;
+        let layout = self.layout;
+        let mut image = Image {
+            width,
+            height,
+            rgb: vec![BACKGROUND; width * height],
+        };
+        let h = layout.panel_height.min(height);
+        let view = self.view.pixels();
+        image.blit(layout.view.0, &view, layout.view.1, h);
+        let s = layout.text_scale;
+        if let (Some(section), Some((x0, w))) = (self.section.as_mut(), layout.section) {
+            let inside = section.inside();
+            let cut: Vec<Rgb> = inside
+                .iter()
+                .map(|&i| if i { CUT } else { BACKGROUND })
+                .collect();
+            image.blit(x0, &cut, w, h);
+            // The box's outline, so pores reaching its faces read as pores.
+            let b = self.spec.bbox;
+            let px = |x: f64| (section.origin[0] + x * section.scale).round();
+            let py = |y: f64| (section.origin[1] - y * section.scale).round();
+            image.frame(
+                (x0 as f64 + px(b[0][0]), py(b[1][1])),
+                (x0 as f64 + px(b[1][0]), py(b[0][1])),
+                h,
+                FRAME,
+            );
+            for y in 0..h {
+                image.set(x0, y, FRAME);
+            }
+            let label = format!("section z = {}", short(section.z0));
+            image.text(x0 + 4 * s, 4 * s, &label, s, LABEL, x0 + w);
+            image.text(4 * s, 4 * s, "isometric", s, LABEL, x0);
+        }
+        // The caption band.
+        for y in h..height {
+            for x in 0..width {
+                image.set(x, y, CAPTION_BACKGROUND);
+            }
+        }
+        for (k, line) in self.spec.lines().iter().enumerate() {
+            let y = h + 4 * s + k * font::CELL.1 * s;
+            let colour = if line.warning { WARNING } else { TITLE };
+            image.text(6 * s, y, &line.text, s, colour, width);
+        }
+        image
+    }
+}
+
+/// A number in few characters (`0.5`, `12.25`, `1.2e-5`).
+fn short(v: f64) -> String {
+    if v == 0.0 || (1e-3..1e5).contains(&v.abs()) {
+        let s = format!("{v:.4}");
+        let s = s.trim_end_matches('0').trim_end_matches('.');
+        s.to_string()
+    } else {
+        format!("{v:.3e}")
+    }
+}
+
+impl Image {
+    fn set(&mut self, x: usize, y: usize, c: Rgb) {
+        if x < self.width && y < self.height {
+            self.rgb[y * self.width + x] = c;
+        }
+    }
+
+    pub fn get(&self, x: usize, y: usize) -> Rgb {
+        self.rgb[y * self.width + x]
+    }
+
+    /// Copies a `w × h` frame to column `x0`.
+    fn blit(&mut self, x0: usize, frame: &[Rgb], w: usize, h: usize) {
+        for y in 0..h.min(self.height) {
+            for x in 0..w.min(self.width.saturating_sub(x0)) {
+                self.rgb[y * self.width + x0 + x] = frame[y * w + x];
+            }
+        }
+    }
+
+    /// A one-pixel rectangle outline, clipped to the rows above `h`.
+    fn frame(&mut self, (x0, y0): (f64, f64), (x1, y1): (f64, f64), h: usize, c: Rgb) {
+        let clip = |v: f64, n: usize| v.clamp(0.0, n as f64 - 1.0) as usize;
+        let (x0, x1) = (clip(x0, self.width), clip(x1, self.width));
+        let (y0, y1) = (clip(y0, h), clip(y1, h));
+        for x in x0..=x1 {
+            for y in [y0, y1] {
+                if self.get(x, y) == BACKGROUND {
+                    self.set(x, y, c);
+                }
+            }
+        }
+        for y in y0..=y1 {
+            for x in [x0, x1] {
+                if self.get(x, y) == BACKGROUND {
+                    self.set(x, y, c);
+                }
+            }
+        }
+    }
+
+    /// Draws `text` at (`x`, `y`) at `scale`, cut with `...` where it would pass `right`.
+    fn text(&mut self, x: usize, y: usize, text: &str, scale: usize, c: Rgb, right: usize) {
+        let advance = font::CELL.0 * scale;
+        let fits = right.saturating_sub(x + 2 * scale) / advance;
+        let chars: Vec<char> = text.chars().map(font::ascii).collect();
+        let shown: Vec<char> = if chars.len() > fits {
+            let keep = fits.saturating_sub(3);
+            chars[..keep].iter().copied().chain("...".chars()).collect()
+        } else {
+            chars
+        };
+        for (k, ch) in shown.into_iter().enumerate() {
+            for gy in 0..8 {
+                for gx in 0..5 {
+                    if font::lit(ch, gx, gy) {
+                        for dy in 0..scale {
+                            for dx in 0..scale {
+                                self.set(x + k * advance + gx * scale + dx, y + gy * scale + dy, c);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Encodes the image as an 8-bit RGB PNG.
+    pub fn write_png(&self, out: &mut dyn Write) -> io::Result<()> {
+        let mut encoder = png::Encoder::new(out, self.width as u32, self.height as u32);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_compression(png::Compression::Fast);
+        encoder.set_filter(png::Filter::Sub);
+        let mut writer = encoder.write_header().map_err(io::Error::other)?;
+        let bytes: Vec<u8> = self.rgb.iter().flatten().copied().collect();
+        writer.write_image_data(&bytes).map_err(io::Error::other)?;
+        writer.finish().map_err(io::Error::other)
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,376 @@
+//! A z-buffered rasteriser of flat-shaded triangles, in fixed tiles, for one orthographic view.
+//!
+//! Invariants:
+//! - Deterministic for any thread count: triangles are added in batches, in order; each batch
+//!   is projected in parallel (a pure function per triangle), binned to tiles in triangle
+//!   order, and each tile draws its triangles in that order, keeping a fragment only when it
+//!   is strictly nearer (the first triangle wins a tie). So a pixel's colour depends only on
+//!   the sequence of triangles, never on which thread drew which tile.
+//! - Watertight: a pixel centre on an edge shared by two triangles is drawn by exactly one of
+//!   them. Edge functions are evaluated with the edge's endpoints in a canonical order (then
+//!   negated), so both triangles compute the same value, and an edge owns its zero line in one
+//!   direction only (see [`owns`]).
+//! - Flat shading with two directional lights fixed to the camera; a face seen from behind
+//!   (its outward normal pointing away from the viewer) is tinted red, so an open or inverted
+//!   surface shows where its inside is visible.
+//!
+//! Why no crate: what is needed is ~200 lines (orthographic camera, edge functions, z-buffer),
+//! and the determinism and streaming above (chunks added as they are read) are easier to
+//! guarantee in our own loop than through a general 3D renderer.
+
+use rayon::prelude::*;
+
+/// Tile edge in pixels.
+const TILE: usize = 64;
+/// Triangles projected per batch: bounds the memory of a whole-mesh render.
+const BATCH: usize = 1 << 18;
+
+pub type Rgb = [u8; 3];
+
+/// A face's colour seen from outside, and from inside (the tint).
+pub const FRONT: [f64; 3] = [0.80, 0.82, 0.88];
+pub const BACK: [f64; 3] = [0.90, 0.16, 0.12];
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn normalize(a: [f64; 3]) -> [f64; 3] {
+    let n = dot(a, a).sqrt();
+    if n > 0.0 {
+        [a[0] / n, a[1] / n, a[2] / n]
+    } else {
+        a
+    }
+}
+
+fn mix(a: [f64; 3], b: [f64; 3], sa: f64, sb: f64) -> [f64; 3] {
+    [
+        a[0] * sa + b[0] * sb,
+        a[1] * sa + b[1] * sb,
+        a[2] * sa + b[2] * sb,
+    ]
+}
+
+/// An orthographic camera fitted to a box: model point to pixel (x right, y down) and depth
+/// (smaller is nearer).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Unit vectors: screen right, screen up, and from the scene toward the viewer.
+    pub right: [f64; 3],
+    pub up: [f64; 3],
+    pub toward: [f64; 3],
+    /// Pixels per model unit.
+    pub scale: f64,
+    /// The pixel of the model origin's projection.
+    pub origin: [f64; 2],
+}
+
+impl Camera {
+    /// Looking from `toward` (a direction, the viewer at infinity) with `up_hint` up on
+    /// screen, the box `[min, max]` centred in a `width × height` panel and filling `fill` of
+    /// it.
+    pub fn fit(
+        toward: [f64; 3],
+        up_hint: [f64; 3],
+        bbox: [[f64; 3]; 2],
+        (width, height): (usize, usize),
+        fill: f64,
+    ) -> Camera {
+        let toward = normalize(toward);
+        let right = normalize(cross(up_hint, toward));
+        let up = cross(toward, right);
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for corner in 0..8 {
+            let p = [0, 1, 2].map(|a| bbox[(corner >> a) & 1][a]);
+            for (k, axis) in [right, up].into_iter().enumerate() {
+                let v = dot(p, axis);
+                lo[k] = lo[k].min(v);
+                hi[k] = hi[k].max(v);
+            }
+        }
+        let extent = [hi[0] - lo[0], hi[1] - lo[1]];
+        let scale = [width as f64 / extent[0], height as f64 / extent[1]]
+            .into_iter()
+            .filter(|s| s.is_finite() && *s > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        let scale = if scale.is_finite() { scale * fill } else { 1.0 };
+        let centre = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
+        Camera {
+            right,
+            up,
+            toward,
+            scale,
+            origin: [
+                width as f64 / 2.0 - centre[0] * scale,
+                height as f64 / 2.0 + centre[1] * scale,
+            ],
+        }
+    }
+
+    /// The pixel position and depth of `p`.
+    pub fn project(&self, p: [f64; 3]) -> [f64; 3] {
+        [
+            self.origin[0] + dot(p, self.right) * self.scale,
+            self.origin[1] - dot(p, self.up) * self.scale,
+            -dot(p, self.toward),
+        ]
+    }
+}
+
+/// A triangle ready to draw: corners in pixels (f32, so a shared corner is the same bits in
+/// every triangle using it), depths, colour, and the pixel box it may cover.
+#[derive(Clone, Copy)]
+struct Flat {
+    x: [f32; 3],
+    y: [f32; 3],
+    z: [f32; 3],
+    rgb: Rgb,
+    /// Pixel columns `x0..x1` and rows `y0..y1` whose centres the bounding box holds.
+    cols: (u32, u32),
+    rows: (u32, u32),
+}
+
+struct Tile {
+    x0: usize,
+    y0: usize,
+    width: usize,
+    height: usize,
+    depth: Vec<f32>,
+    rgb: Vec<Rgb>,
+    /// Indices into the current batch, in triangle order.
+    list: Vec<u32>,
+}
+
+/// One view's frame: its camera, colour and depth per pixel, in tiles.
+pub struct Raster {
+    pub camera: Camera,
+    width: usize,
+    height: usize,
+    tiles_x: usize,
+    tiles: Vec<Tile>,
+    lights: [[f64; 3]; 2],
+}
+
+/// Whether the directed edge `a → b` owns the pixel centres exactly on it: exactly one of
+/// `a → b` and `b → a` does, so two triangles sharing an edge never both draw, nor both skip,
+/// such a pixel.
+fn owns(a: (f64, f64), b: (f64, f64)) -> bool {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    dy > 0.0 || (dy == 0.0 && dx > 0.0)
+}
+
+/// The edge function of `a → b` at `p`, the same bits (negated) for `b → a`.
+fn edge(a: (f64, f64), b: (f64, f64), p: (f64, f64)) -> f64 {
+    let swap = (b.0, b.1) < (a.0, a.1);
+    let (a, b) = if swap { (b, a) } else { (a, b) };
+    let e = (b.0 - a.0) * (p.1 - a.1) - (b.1 - a.1) * (p.0 - a.0);
+    if swap { -e } else { e }
+}
+
+impl Raster {
+    /// An empty frame of `size` pixels (all `background`) for `camera`.
+    pub fn new(camera: Camera, (width, height): (usize, usize), background: Rgb) -> Raster {
+        let tiles_x = width.div_ceil(TILE);
+        let tiles_y = height.div_ceil(TILE);
+        let mut tiles = Vec::with_capacity(tiles_x * tiles_y);
+        for ty in 0..tiles_y {
+            for tx in 0..tiles_x {
+                let (x0, y0) = (tx * TILE, ty * TILE);
+                let (w, h) = (TILE.min(width - x0), TILE.min(height - y0));
+                tiles.push(Tile {
+                    x0,
+                    y0,
+                    width: w,
+                    height: h,
+                    depth: vec![f32::INFINITY; w * h],
+                    rgb: vec![background; w * h],
+                    list: Vec::new(),
+                });
+            }
+        }
+        // A key light from the viewer's upper left, a weaker fill from the right.
+        let key = normalize(mix(
+            camera.toward,
+            mix(camera.up, camera.right, 0.6, -0.5),
+            1.0,
+            1.0,
+        ));
+        let fill = normalize(mix(
+            camera.toward,
+            mix(camera.right, camera.up, 0.9, -0.2),
+            0.6,
+            1.0,
+        ));
+        Raster {
+            camera,
+            width,
+            height,
+            tiles_x,
+            tiles,
+            lights: [key, fill],
+        }
+    }
+
+    /// The colour of a face of (unnormalised) outward normal `n`.
+    fn shade(&self, n: [f64; 3]) -> Rgb {
+        let n = normalize(n);
+        let front = dot(n, self.camera.toward) >= 0.0;
+        let (n, base) = if front {
+            (n, FRONT)
+        } else {
+            ([-n[0], -n[1], -n[2]], BACK)
+        };
+        let light =
+            0.22 + 0.68 * dot(n, self.lights[0]).max(0.0) + 0.30 * dot(n, self.lights[1]).max(0.0);
+        base.map(|c| (255.0 * (c * light).clamp(0.0, 1.0)).round() as u8)
+    }
+
+    /// Projects one triangle; `None` when it covers no pixel centre.
+    fn flatten(&self, corners: [[f32; 3]; 3]) -> Option<Flat> {
+        let p = corners.map(|c| c.map(f64::from));
+        let n = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+        let s = p.map(|c| self.camera.project(c).map(|v| v as f32));
+        let (mut lo, mut hi) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
+        for c in &s {
+            for k in 0..2 {
+                lo[k] = lo[k].min(c[k]);
+                hi[k] = hi[k].max(c[k]);
+            }
+        }
+        // Pixel `i` has its centre at `i + 0.5`: the centres within [lo, hi].
+        let range = |lo: f32, hi: f32, n: usize| -> Option<(u32, u32)> {
+            let first = (f64::from(lo) - 0.5).ceil().max(0.0);
+            let last = (f64::from(hi) - 0.5).floor().min(n as f64 - 1.0);
+            (first.is_finite() && last.is_finite() && first <= last)
+                .then_some((first as u32, last as u32 + 1))
+        };
+        let cols = range(lo[0], hi[0], self.width)?;
+        let rows = range(lo[1], hi[1], self.height)?;
+        Some(Flat {
+            x: s.map(|c| c[0]),
+            y: s.map(|c| c[1]),
+            z: s.map(|c| c[2]),
+            rgb: self.shade(n),
+            cols,
+            rows,
+        })
+    }
+
+    /// Draws `count` triangles, triangle `i` having the corners `corners(i)` (`None`: the
+    /// triangle cannot be resolved, which fails the call with its index).
+    pub fn add(
+        &mut self,
+        count: usize,
+        corners: &(dyn Fn(usize) -> Option<[[f32; 3]; 3]> + Sync),
+    ) -> Result<(), usize> {
+        let mut start = 0;
+        while start < count {
+            let end = (start + BATCH).min(count);
+            let this = &*self;
+            let flats: Vec<Option<Flat>> = (start..end)
+                .into_par_iter()
+                .map(|i| corners(i).map(|c| this.flatten(c)).ok_or(i))
+                .collect::<Result<_, usize>>()?;
+            self.draw(&flats);
+            start = end;
+        }
+        Ok(())
+    }
+
+    /// Bins a batch to the tiles, in order, and draws every tile.
+    fn draw(&mut self, flats: &[Option<Flat>]) {
+        for tile in &mut self.tiles {
+            tile.list.clear();
+        }
+        for (i, f) in flats.iter().enumerate() {
+            let Some(f) = f else { continue };
+            let (tx0, tx1) = (f.cols.0 as usize / TILE, (f.cols.1 as usize - 1) / TILE);
+            let (ty0, ty1) = (f.rows.0 as usize / TILE, (f.rows.1 as usize - 1) / TILE);
+            for ty in ty0..=ty1 {
+                for tx in tx0..=tx1 {
+                    self.tiles[ty * self.tiles_x + tx].list.push(i as u32);
+                }
+            }
+        }
+        self.tiles
+            .par_iter_mut()
+            .filter(|t| !t.list.is_empty())
+            .for_each(|tile| {
+                for k in 0..tile.list.len() {
+                    if let Some(f) = &flats[tile.list[k] as usize] {
+                        tile.fill(f);
+                    }
+                }
+            });
+    }
+
+    /// The frame, row by row.
+    pub fn pixels(&self) -> Vec<Rgb> {
+        let mut out = vec![[0u8; 3]; self.width * self.height];
+        for tile in &self.tiles {
+            for row in 0..tile.height {
+                let at = (tile.y0 + row) * self.width + tile.x0;
+                out[at..at + tile.width]
+                    .copy_from_slice(&tile.rgb[row * tile.width..(row + 1) * tile.width]);
+            }
+        }
+        out
+    }
+}
+
+impl Tile {
+    /// Draws the part of `f` within this tile.
+    fn fill(&mut self, f: &Flat) {
+        let v = [0, 1, 2].map(|k| (f64::from(f.x[k]), f64::from(f.y[k])));
+        let area = edge(v[0], v[1], v[2]);
+        if area == 0.0 || !area.is_finite() {
+            return;
+        }
+        // Ordered so that the inside is where every edge function is positive.
+        let v = if area > 0.0 { v } else { [v[0], v[2], v[1]] };
+        let z = if area > 0.0 {
+            f.z.map(f64::from)
+        } else {
+            [f.z[0], f.z[2], f.z[1]].map(f64::from)
+        };
+        let area = area.abs();
+        let edges = [(v[1], v[2]), (v[2], v[0]), (v[0], v[1])];
+        let owned = edges.map(|(a, b)| owns(a, b));
+        let cols = (
+            (f.cols.0 as usize).max(self.x0),
+            (f.cols.1 as usize).min(self.x0 + self.width),
+        );
+        let rows = (
+            (f.rows.0 as usize).max(self.y0),
+            (f.rows.1 as usize).min(self.y0 + self.height),
+        );
+        for py in rows.0..rows.1 {
+            for px in cols.0..cols.1 {
+                let p = (px as f64 + 0.5, py as f64 + 0.5);
+                let w = [0, 1, 2].map(|k| edge(edges[k].0, edges[k].1, p));
+                if (0..3).any(|k| w[k] < 0.0 || (w[k] == 0.0 && !owned[k])) {
+                    continue;
+                }
+                let depth = ((w[0] * z[0] + w[1] * z[1] + w[2] * z[2]) / area) as f32;
+                let at = (py - self.y0) * self.width + (px - self.x0);
+                if depth < self.depth[at] {
+                    self.depth[at] = depth;
+                    self.rgb[at] = f.rgb;
+                }
+            }
+        }
+    }
+}
