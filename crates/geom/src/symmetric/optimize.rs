@@ -270,7 +270,7 @@ fn solve_gram(g: &[Vector], r: &[f64]) -> Option<Vec<f64>> {
         2 => {
             let (a, b, c) = (g[0].dot(&g[0]), g[0].dot(&g[1]), g[1].dot(&g[1]));
             let det = a * c - b * b;
-            if !(det > 1e-10 * a * c) {
+            if det.is_nan() || det <= 1e-10 * a * c {
                 return None;
             }
             Some(vec![
