@@ -31,7 +31,7 @@ fn targets(volume: Option<f64>, area: Option<f64>, keep: bool) -> OptimizationTa
 
 /// Area of `{Φ = 0}` in the cube: the clipped mesh's triangles, less those on a cube face.
 fn mesh_area(cell: &FittedCell, samples: usize) -> f64 {
-    let mesh = contour_clipped(cell, Element3::Cube, samples, &|_| {}).expect("the cell contours");
+    let mesh = contour_clipped(cell, Element3::Cube, samples, &|_| {}).expect("contoured");
     let v = |i: u32| mesh.vertices[i as usize].map(f64::from);
     mesh.triangles
         .iter()
@@ -64,7 +64,7 @@ fn perimeter(cell: &FittedCell, samples: usize) -> f64 {
         Element2::Square,
         samples,
     )
-    .expect("the cell contours");
+    .expect("contoured");
     let mut total = 0.0;
     for lp in &region.boundary {
         for i in 0..lp.len() {

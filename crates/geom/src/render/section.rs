@@ -115,7 +115,9 @@ impl Section {
         // centre line is counted by exactly one of its two segments (or none, at a tip).
         let first = (a[1] - 0.5).ceil().max(0.0);
         let last = ((b[1] - 0.5).ceil() - 1.0).min(self.rows.len() as f64 - 1.0);
-        if !(first <= last) {
+        // Also nothing to do when a coordinate is NaN (every comparison false).
+        let some_rows = first <= last;
+        if !some_rows {
             return;
         }
         for r in first as usize..=last as usize {

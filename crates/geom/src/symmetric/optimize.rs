@@ -270,9 +270,7 @@ fn solve_gram(g: &[Vector], r: &[f64]) -> Option<Vec<f64>> {
         2 => {
             let (a, b, c) = (g[0].dot(&g[0]), g[0].dot(&g[1]), g[1].dot(&g[1]));
             let det = a * c - b * b;
-            // Also `None` when a product is NaN: the comparison is then false.
-            let independent = det > 1e-10 * a * c;
-            if !independent {
+            if det.is_nan() || det <= 1e-10 * a * c {
                 return None;
             }
             Some(vec![
