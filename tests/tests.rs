@@ -10,8 +10,8 @@ mod common;
 
 mod codegen;
 mod command_line_edges;
-mod conventions;
 mod contract;
+mod conventions;
 mod crystal;
 mod determinism;
 mod examples;

@@ -8,8 +8,8 @@ use clap::{ArgAction, Args};
 
 use super::{Failure, ManifestArgs, compile, load_manifest, open_cache, sweep_outputs};
 use crate::build::Builder;
-use crate::diagnostics::color::paint;
 use crate::cache::SizeLimit;
+use crate::diagnostics::color::paint;
 use crate::files::{OutputDir, write_atomically};
 use crate::progress::{Bars, NoProgress, Progress};
 use crate::report::{FailedOutput, Report};
@@ -60,7 +60,7 @@ pub fn run_build(args: &BuildArgs) -> Result<(), Failure> {
 /// [`run_build`], also leaving what it built in `built` once every report is written (even
 /// when it then fails over defective meshes).
 pub fn run_build_keeping(args: &BuildArgs, built: &mut Option<Built>) -> Result<(), Failure> {
-        let mut manifest = load_manifest(&args.manifest)?;
+    let mut manifest = load_manifest(&args.manifest)?;
     if args.no_previews {
         manifest.previews = false;
     }

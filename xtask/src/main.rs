@@ -14,9 +14,9 @@ mod bench_geom;
 mod bench_mesh;
 mod bench_tile;
 mod fuzz;
+mod gallery;
 mod man;
 mod vendor_web;
-mod gallery;
 
 /// Counts live heap bytes so that the fuzz runner can bound them (see `fuzz/bound.rs`).
 #[global_allocator]
