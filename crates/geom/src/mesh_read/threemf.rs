@@ -631,7 +631,11 @@ mod tests {
                 "line 15",
                 "found 7",
             ),
-            (MODEL.replace("</build>", "</build"), "", "cut short"),
+            (
+                MODEL.replace("</build>\n</model>\n", "</build"),
+                "",
+                "cut short",
+            ),
         ];
         for (xml, line, what) in cases {
             let e = parse_model(xml.as_bytes()).expect_err(what).to_string();
