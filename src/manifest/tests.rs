@@ -1038,8 +1038,13 @@ fn two_outputs_writing_one_file_is_an_error_naming_both_and_the_file() {
 fn two_spellings_of_one_file_collide_and_different_formats_do_not() {
     let text = render_errors(TWO_OUTPUTS, &["outputs.c.path=./b"]);
     assert!(text.contains("both write `out/b.stl`"), "{text}");
-    // `b.stl` and `b.ply` are different files.
-    parse_ok(TWO_OUTPUTS, &["outputs.c.formats=[\"ply\"]"]);
+    // `b.stl` and `b.ply` are different files, but both outputs' previews would be `b.png`.
+    let text = render_errors(TWO_OUTPUTS, &["outputs.c.formats=[\"ply\"]"]);
+    assert!(text.contains("both write `out/b.png`"), "{text}");
+    parse_ok(
+        TWO_OUTPUTS,
+        &["outputs.c.formats=[\"ply\"]", "build.previews=false"],
+    );
 }
 
 #[test]

@@ -79,6 +79,8 @@ fn key_type(table_path: &str, key: &str) -> Option<Value> {
         ("build", "out_dir") => string(),
         ("build", "units") => one_of(&super::UNITS),
         ("build", "report") => one_of(&["full", "basic"]),
+        ("build", "previews") => boolean(),
+        ("build", "preview_size") => numbers(),
         ("cache", "max_size") => json!({
             "anyOf": [
                 { "type": "integer", "minimum": 0 },
@@ -110,7 +112,7 @@ fn key_type(table_path: &str, key: &str) -> Option<Value> {
         ("cells.*.fit", "n") => json!({ "anyOf": [integer(), { "const": "auto" }] }),
         ("cells.*.fit", "max_n") => integer(),
         ("cells.*.fit" | "cells.*.optimize" | "cells.*.reconstruct", "tolerance") => number(),
-        ("cells.*.optimize", "volume_fraction") => number(),
+        ("cells.*.optimize", "volume_fraction" | "surface_area") => number(),
         ("cells.*.optimize", "max_iterations") => integer(),
         ("cells.*.symmetry", "generators") => json!({ "type": "array" }),
         ("cells.*.symmetry", "dimension") => integer(),
