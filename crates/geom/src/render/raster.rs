@@ -20,6 +20,8 @@
 
 use rayon::prelude::*;
 
+use crate::vec3::{cross, dot, sub};
+
 /// Tile edge in pixels.
 const TILE: usize = 64;
 /// Triangles projected per batch: bounds the memory of a whole-mesh render.
@@ -30,22 +32,6 @@ pub type Rgb = [u8; 3];
 /// A face's colour seen from outside, and from inside (the tint).
 pub const FRONT: [f64; 3] = [0.80, 0.82, 0.88];
 pub const BACK: [f64; 3] = [0.90, 0.16, 0.12];
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
 
 fn normalize(a: [f64; 3]) -> [f64; 3] {
     let n = dot(a, a).sqrt();
