@@ -19,8 +19,10 @@ pub mod section;
 use std::io::{self, Write};
 
 use crate::mesh::{Mesh, MeshChunk};
-use raster::{Camera, Raster, Rgb};
-use section::Section;
+use rayon::prelude::*;
+
+use raster::{Camera, Flat, Raster, Rgb};
+use section::{Section, Segment};
 
 const BACKGROUND: Rgb = [250, 250, 250];
 const CAPTION_BACKGROUND: Rgb = [32, 34, 40];
@@ -34,6 +36,10 @@ const FRAME: Rgb = [200, 200, 205];
 const MAX_WARNINGS: usize = 4;
 /// The share of a panel the drawing fills.
 const FILL: f64 = 0.86;
+/// Triangles per batch: bounds the memory of a whole-mesh render.
+const BATCH: usize = 1 << 18;
+/// Triangles one task takes in a row, so the thread pool's cost per task is small against it.
+const RUN: usize = 4096;
 
 /// One line of the caption.
 #[derive(Clone, Debug, PartialEq)]
@@ -155,15 +161,38 @@ impl Preview {
     }
 
     /// Adds `count` triangles, triangle `i` with corners `corners(i)`; `Err(i)` when one cannot
-    /// be resolved.
+    /// be resolved. Each triangle's corners are looked up once, for both panels: runs of
+    /// triangles are projected and cut in parallel, then drawn and filled in triangle order.
     pub fn add(
         &mut self,
         count: usize,
         corners: &(dyn Fn(usize) -> Option<[[f32; 3]; 3]> + Sync),
     ) -> Result<(), usize> {
-        self.view.add(count, corners)?;
-        if let Some(section) = &mut self.section {
-            section.add(count, corners)?;
+        let mut start = 0;
+        while start < count {
+            let end = (start + BATCH).min(count);
+            let (view, section) = (&self.view, self.section.as_ref());
+            let firsts: Vec<usize> = (start..end).step_by(RUN).collect();
+            let runs = firsts
+                .into_par_iter()
+                .map(|first| {
+                    let (mut flats, mut cuts) = (Vec::new(), Vec::new());
+                    for i in first..(first + RUN).min(end) {
+                        let c = corners(i).ok_or(i)?;
+                        flats.extend(view.flatten(c));
+                        cuts.extend(section.and_then(|s| s.segment(c)));
+                    }
+                    Ok((flats, cuts))
+                })
+                .collect::<Result<Vec<(Vec<Flat>, Vec<Segment>)>, usize>>()?;
+            let flats: Vec<Flat> = runs.iter().flat_map(|r| r.0.iter().copied()).collect();
+            self.view.draw(&flats);
+            if let Some(section) = &mut self.section {
+                for cut in runs.iter().flat_map(|r| r.1.iter()) {
+                    section.cross(*cut);
+                }
+            }
+            start = end;
         }
         Ok(())
     }

@@ -1,11 +1,11 @@
 //! A z-buffered rasteriser of flat-shaded triangles, in fixed tiles, for one orthographic view.
 //!
 //! Invariants:
-//! - Deterministic for any thread count: triangles are added in batches, in order; each batch
-//!   is projected in parallel (a pure function per triangle), binned to tiles in triangle
-//!   order, and each tile draws its triangles in that order, keeping a fragment only when it
-//!   is strictly nearer (the first triangle wins a tie). So a pixel's colour depends only on
-//!   the sequence of triangles, never on which thread drew which tile.
+//! - Deterministic for any thread count: triangles come in batches, in order, each projected
+//!   by a pure function ([`Raster::flatten`], run in parallel by the caller); a batch is binned
+//!   to tiles in triangle order, and each tile draws its triangles in that order, keeping a
+//!   fragment only when it is strictly nearer (the first triangle wins a tie). So a pixel's
+//!   colour depends only on the sequence of triangles, never on which thread drew which tile.
 //! - Watertight: a pixel centre on an edge shared by two triangles is drawn by exactly one of
 //!   them. Edge functions are evaluated with the edge's endpoints in a canonical order (then
 //!   negated), so both triangles compute the same value, and an edge owns its zero line in one
@@ -24,8 +24,6 @@ use crate::vec3::{cross, dot, sub};
 
 /// Tile edge in pixels.
 const TILE: usize = 64;
-/// Triangles projected per batch: bounds the memory of a whole-mesh render.
-const BATCH: usize = 1 << 18;
 
 pub type Rgb = [u8; 3];
 
@@ -119,7 +117,7 @@ impl Camera {
 /// A triangle ready to draw: corners in pixels (f32, so a shared corner is the same bits in
 /// every triangle using it), depths, colour, and the pixel box it may cover.
 #[derive(Clone, Copy)]
-struct Flat {
+pub struct Flat {
     x: [f32; 3],
     y: [f32; 3],
     z: [f32; 3],
@@ -156,6 +154,23 @@ pub struct Raster {
 fn owns(a: (f64, f64), b: (f64, f64)) -> bool {
     let (dx, dy) = (b.0 - a.0, b.1 - a.1);
     dy > 0.0 || (dy == 0.0 && dx > 0.0)
+}
+
+/// The pixels `i` of `0..n` whose centre `i + 0.5` lies in `[lo, hi]`, as `(first, last + 1)`;
+/// `None` when there are none (or a bound is NaN). Written without `ceil`/`floor`, which are
+/// library calls on the baseline x86-64 target and were a tenth of a big mesh's preview.
+fn centres(lo: f32, hi: f32, n: usize) -> Option<(u32, u32)> {
+    let (lo, hi) = (f64::from(lo) - 0.5, f64::from(hi) - 0.5);
+    let top = n as f64 - 1.0;
+    let some = lo <= hi && hi >= 0.0 && lo <= top;
+    if !some {
+        return None;
+    }
+    // Both within [0, n − 1] now, where truncation is the floor.
+    let (lo, hi) = (lo.max(0.0), hi.min(top));
+    let first = lo as u32 + u32::from(f64::from(lo as u32) < lo);
+    let last = hi as u32;
+    (first <= last).then_some((first, last + 1))
 }
 
 /// The edge function of `a → b` at `p`, the same bits (negated) for `b → a`.
@@ -224,10 +239,10 @@ impl Raster {
         base.map(|c| (255.0 * (c * light).clamp(0.0, 1.0)).round() as u8)
     }
 
-    /// Projects one triangle; `None` when it covers no pixel centre.
-    fn flatten(&self, corners: [[f32; 3]; 3]) -> Option<Flat> {
+    /// Projects one triangle; `None` when it covers no pixel centre. Most triangles of a big
+    /// mesh are smaller than a pixel and cover none, so that is decided before the shading.
+    pub fn flatten(&self, corners: [[f32; 3]; 3]) -> Option<Flat> {
         let p = corners.map(|c| c.map(f64::from));
-        let n = cross(sub(p[1], p[0]), sub(p[2], p[0]));
         let s = p.map(|c| self.camera.project(c).map(|v| v as f32));
         let (mut lo, mut hi) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
         for c in &s {
@@ -236,15 +251,9 @@ impl Raster {
                 hi[k] = hi[k].max(c[k]);
             }
         }
-        // Pixel `i` has its centre at `i + 0.5`: the centres within [lo, hi].
-        let range = |lo: f32, hi: f32, n: usize| -> Option<(u32, u32)> {
-            let first = (f64::from(lo) - 0.5).ceil().max(0.0);
-            let last = (f64::from(hi) - 0.5).floor().min(n as f64 - 1.0);
-            (first.is_finite() && last.is_finite() && first <= last)
-                .then_some((first as u32, last as u32 + 1))
-        };
-        let cols = range(lo[0], hi[0], self.width)?;
-        let rows = range(lo[1], hi[1], self.height)?;
+        let cols = centres(lo[0], hi[0], self.width)?;
+        let rows = centres(lo[1], hi[1], self.height)?;
+        let n = cross(sub(p[1], p[0]), sub(p[2], p[0]));
         Some(Flat {
             x: s.map(|c| c[0]),
             y: s.map(|c| c[1]),
@@ -255,34 +264,12 @@ impl Raster {
         })
     }
 
-    /// Draws `count` triangles, triangle `i` having the corners `corners(i)` (`None`: the
-    /// triangle cannot be resolved, which fails the call with its index).
-    pub fn add(
-        &mut self,
-        count: usize,
-        corners: &(dyn Fn(usize) -> Option<[[f32; 3]; 3]> + Sync),
-    ) -> Result<(), usize> {
-        let mut start = 0;
-        while start < count {
-            let end = (start + BATCH).min(count);
-            let this = &*self;
-            let flats: Vec<Option<Flat>> = (start..end)
-                .into_par_iter()
-                .map(|i| corners(i).map(|c| this.flatten(c)).ok_or(i))
-                .collect::<Result<_, usize>>()?;
-            self.draw(&flats);
-            start = end;
-        }
-        Ok(())
-    }
-
-    /// Bins a batch to the tiles, in order, and draws every tile.
-    fn draw(&mut self, flats: &[Option<Flat>]) {
+    /// Bins a batch of projected triangles to the tiles, in order, and draws every tile.
+    pub fn draw(&mut self, flats: &[Flat]) {
         for tile in &mut self.tiles {
             tile.list.clear();
         }
         for (i, f) in flats.iter().enumerate() {
-            let Some(f) = f else { continue };
             let (tx0, tx1) = (f.cols.0 as usize / TILE, (f.cols.1 as usize - 1) / TILE);
             let (ty0, ty1) = (f.rows.0 as usize / TILE, (f.rows.1 as usize - 1) / TILE);
             for ty in ty0..=ty1 {
@@ -296,9 +283,7 @@ impl Raster {
             .filter(|t| !t.list.is_empty())
             .for_each(|tile| {
                 for k in 0..tile.list.len() {
-                    if let Some(f) = &flats[tile.list[k] as usize] {
-                        tile.fill(f);
-                    }
+                    tile.fill(&flats[tile.list[k] as usize]);
                 }
             });
     }

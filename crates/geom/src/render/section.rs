@@ -14,8 +14,8 @@
 
 use rayon::prelude::*;
 
-/// Triangles cut per batch.
-const BATCH: usize = 1 << 18;
+/// A triangle's cut by the plane, in pixels.
+pub type Segment = [[f64; 2]; 2];
 
 /// The cut of a mesh streamed in, as crossings per pixel row of a `width × height` panel.
 pub struct Section {
@@ -55,7 +55,7 @@ impl Section {
     }
 
     /// The cut segment of one triangle, in pixels: `None` when the plane misses it.
-    fn segment(&self, c: [[f32; 3]; 3]) -> Option<[[f64; 2]; 2]> {
+    pub fn segment(&self, c: [[f32; 3]; 3]) -> Option<Segment> {
         let p = c.map(|v| v.map(f64::from));
         let above = p.map(|v| v[2] >= self.z0);
         let ups = above.iter().filter(|&&a| a).count();
@@ -83,33 +83,8 @@ impl Section {
         (n == 2).then_some(ends)
     }
 
-    /// Cuts `count` triangles (`corners(i)` as in [`super::raster::Raster::add`]).
-    pub fn add(
-        &mut self,
-        count: usize,
-        corners: &(dyn Fn(usize) -> Option<[[f32; 3]; 3]> + Sync),
-    ) -> Result<(), usize> {
-        let mut start = 0;
-        while start < count {
-            let end = (start + BATCH).min(count);
-            let this = &*self;
-            let segments: Vec<[[f64; 2]; 2]> = (start..end)
-                .into_par_iter()
-                .map(|i| corners(i).map(|c| this.segment(c)).ok_or(i))
-                .collect::<Result<Vec<_>, usize>>()?
-                .into_iter()
-                .flatten()
-                .collect();
-            for [a, b] in segments {
-                self.cross(a, b);
-            }
-            start = end;
-        }
-        Ok(())
-    }
-
     /// Records where segment `a–b` crosses the rows' centre lines.
-    fn cross(&mut self, a: [f64; 2], b: [f64; 2]) {
+    pub fn cross(&mut self, [a, b]: Segment) {
         let (a, b) = if a[1] <= b[1] { (a, b) } else { (b, a) };
         // Rows whose centre `r + 0.5` lies in [a.y, b.y): half-open, so a vertex on a
         // centre line is counted by exactly one of its two segments (or none, at a tip).
