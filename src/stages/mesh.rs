@@ -388,4 +388,62 @@ mod tests {
             assert!((got - want).abs() < 1e-12, "{out:?} vs {expected:?}");
         }
     }
+
+    /// `n = "auto"` on the shipped mesh cell, through the stages a build runs: the fit it
+    /// returns is the fixed-N fit (`sample` then `fit`) at the N it chose, bit for bit, since
+    /// its nested samples are those of sampling that size afresh. Oh converges (N = 32 at
+    /// tolerance 0.1); Td (tetrahedron corners mirrored, evaluated point by point in both
+    /// paths) stops at `max_n` = 64 under a tolerance it cannot meet.
+    #[test]
+    fn automatic_n_on_a_mesh_cell_is_the_fixed_n_fit_at_the_n_it_chose() {
+        use super::super::symmetric::{FitStage, FittedPayload, SampleStage};
+        use crate::manifest::{FitResolution, GroupSpec, Symmetric};
+
+        let cross = read_soup(
+            "cross.obj",
+            include_bytes!("../../examples/meshes/cross.obj"),
+        )
+        .expect("cross");
+        let cell = encode(&cross, MeshSampling::SignedDistance);
+        for (group, tolerance, n_expected, converged) in
+            [("Oh", 0.1, 32, true), ("Td", 1e-9, 64, false)]
+        {
+            let spec = |n| Symmetric {
+                group: GroupSpec::Named(group.to_string()),
+                n,
+                mirror: true,
+                symmetrize: false,
+                normal_to_faces: false,
+                offset: 0.0,
+                invert: false,
+                optimize: None,
+            };
+            let auto = FitStage {
+                spec: spec(FitResolution::Auto {
+                    tolerance,
+                    max_n: 64,
+                }),
+            };
+            let found =
+                FittedPayload::from_bytes(&auto.run(&cell).expect("auto fit")).expect("payload");
+            let summary = found.auto.clone().expect("auto summary");
+            assert_eq!((summary.n, summary.converged), (n_expected, converged));
+            let fixed_spec = spec(FitResolution::Fixed(n_expected));
+            let samples = SampleStage {
+                spec: fixed_spec.clone(),
+                n: n_expected,
+            }
+            .run(&cell)
+            .expect("samples");
+            let fixed = FitStage { spec: fixed_spec }
+                .run(&samples)
+                .expect("fixed fit");
+            let fixed = FittedPayload::from_bytes(&fixed).expect("payload");
+            assert_eq!(found.n, fixed.n, "{group}");
+            assert!(
+                found.coefficients == fixed.coefficients,
+                "{group}: the coefficients of automatic N differ from the fixed-N fit's"
+            );
+        }
+    }
 }
