@@ -713,7 +713,10 @@ mod tests {
                 let stamp = Stamp {
                     units: Some(units),
                     title: "a \"b\" <c>".into(),
-                    parameters: vec![("d e".into(), "&".into())],
+                    parameters: vec![
+                        ("d e".into(), "&".into()),
+                        ("cell.name".into(), "<g>".into()),
+                    ],
                     ..Stamp::default()
                 };
                 let mut bytes = Vec::new();
@@ -729,6 +732,15 @@ mod tests {
                     .collect();
                 assert_eq!(back, mesh.vertices);
                 assert_eq!(model.soup.triangles, mesh.triangles);
+                let text = |v: &str| v.to_string();
+                assert_eq!(
+                    model.metadata[2..],
+                    [
+                        (text("latticebuild:d_e"), text("&")),
+                        (text("latticebuild:cell.name"), text("<g>"))
+                    ]
+                );
+                assert_eq!(model.metadata[0], (text("Title"), text("a \"b\" <c>")));
             }
         }
     }
