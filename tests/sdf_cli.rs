@@ -135,7 +135,8 @@ fn the_file_is_stamped_and_captured_stderr_has_no_bar() {
             .unwrap_or_else(|| panic!("no {name}"))
     };
     assert_eq!(get("Title"), "b");
-    assert_eq!(get("latticebuild:sdf"), "ball scale 2");
+    // The program in canonical text, as an SDF output's stage key has it.
+    assert_eq!(get("latticebuild:sdf"), "ball scale 2.0");
     assert_eq!(get("latticebuild:samples"), "[10,11,12]");
     assert_eq!(get("latticebuild:contour"), "cubes");
     // A ball of radius 2 has the box [-2, 2]³ (the paper's rule pads only unbounded solids).

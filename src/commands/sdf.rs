@@ -262,7 +262,7 @@ fn command(args: &[String]) -> Result<(), Failure> {
     .map_err(|e| Failure::Build(format!("{e}: `{shown}` was not written")))?;
     let (mesh, check, domain) = (&contoured.mesh, &contoured.check, &contoured.domain);
     stage.phase("writing");
-    let stamp = stamp(&options, domain);
+    let stamp = stamp(&options, &program, domain);
     write_user_file(&options.output, &mut |w| {
         mesh_io::write_mesh_stamped(mesh, format, Encoding::Binary, &stamp, w)
     })
@@ -300,12 +300,11 @@ fn command(args: &[String]) -> Result<(), Failure> {
 
 /// What the written file says about itself, as a build's output does: the tool and its
 /// version, `--units`, the file's stem as title, and the parameters in the names of an SDF
-/// output's resolved ones (`sdf`, `bounds`, `samples`, `contour`).
-fn stamp(options: &Options, domain: &Aabb) -> Stamp {
-    let program: Vec<&str> = options.words.iter().map(|w| w.text.as_str()).collect();
+/// output's resolved ones (`sdf` in canonical text, `bounds`, `samples`, `contour`).
+fn stamp(options: &Options, program: &Program, domain: &Aabb) -> Stamp {
     let json = |v: &[f64; 3]| serde_json::json!(v).to_string();
     let parameters = [
-        ("sdf", program.join(" ")),
+        ("sdf", program.canonical()),
         ("bounds.min", json(&domain.min)),
         ("bounds.max", json(&domain.max)),
         ("samples", serde_json::json!(options.samples).to_string()),

@@ -6,7 +6,8 @@
 //!   parsed model decides is then written from the model, not from a second copy of the
 //!   defaults: `solid`, its `offset`/`thickness` (or `wall`, `grow`, `volume_fraction`),
 //!   `domain`, `cell_size`, `samples` (the counts, also when `voxel` gave them), `formats`,
-//!   `ascii`, `path`, `keep`, and the SDF and tiled outputs' own keys. A key the build did not
+//!   `ascii`, `path`, `keep`, and the SDF (its program in canonical text) and tiled outputs'
+//!   own keys. A key the build did not
 //!   use (no `bounds`, no `skin`) stays absent.
 //! - `cell` (and a tiled output's `scaffold`) is the referenced table as read, with `name`
 //!   added, and a symmetric cell's `fit` as the model resolved it; a transition's `cell` is
@@ -139,6 +140,9 @@ impl Manifest {
 
 fn program_output(o: &ProgramOutput) -> Map<String, Value> {
     let mut m = Map::new();
+    // Canonical, as the stage's key has it: another spelling of the same program (`BALL`,
+    // `4/2`) builds, and stamps, the same file.
+    m.insert("sdf".into(), json!(o.program.canonical()));
     // Without `bounds`, the box is the program's own, found when it is contoured (the
     // report's `sdf_box`).
     if let Some([min, max]) = o.bounds {
