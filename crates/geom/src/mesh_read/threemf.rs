@@ -365,6 +365,19 @@ fn place(
     })?;
     soup.positions
         .extend(object.positions.iter().map(|&p| apply(m, p)));
+    // Finite numbers composed can overflow (`-1e308` times 2): a soup's coordinates are finite.
+    if let Some(i) = soup.positions[first as usize..]
+        .iter()
+        .position(|p| p.iter().any(|c| !c.is_finite()))
+    {
+        return Err(MeshReadError::Unsupported {
+            format: Format::ThreeMf,
+            at: Location::Line(scanner.line_of(at)),
+            what: format!(
+                "a transform placing vertex {i} of object {id} beyond the finite numbers"
+            ),
+        });
+    }
     let mirrored = determinant(m) < 0.0;
     soup.triangles.extend(object.triangles.iter().map(|t| {
         let t = t.map(|i| i + first);
@@ -768,6 +781,12 @@ mod tests {
                 MODEL.replace("objectid=\"4\"", "objectid=\"7\""),
                 "line 15",
                 "found 7",
+            ),
+            (
+                // Object 3 moved to x >= 10 by the component, then scaled by -1e308.
+                MODEL.replace("transform=\"-1 0 0", "transform=\"-1e308 0 0"),
+                "line 13",
+                "vertex 0 of object 3 beyond the finite",
             ),
             (
                 MODEL.replace("</build>\n</model>\n", "</build"),
