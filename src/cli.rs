@@ -72,6 +72,7 @@ enum Command {
                             or NX,NY,NZ; default 60^3), -b X0,Y0,Z0,X1,Y1,Z1 (default: the \
                             solid's bounds), -o FILE (default out.ply; .stl .ply .obj .off .vtk), \
                             --contour tetrahedra (marching tetrahedra; default cubes), \
+                            --units UNIT (mm, cm, m, um or in, for the file's header; default mm), \
                             -q (no summary), --allow-large (contour even a grid estimated \
                             to need more memory or disk than the machine has)."
     )]

@@ -1,7 +1,8 @@
 //! How long stages report progress ([`Progress`], [`StageProgress`]), and the bars that show
 //! it: shown only on a terminal, only when not quiet, and only once a stage has taken longer
-//! than half a second, so quick builds print nothing but summaries. The stages and the
-//! builder both depend on this module, not on each other for it.
+//! than half a second, so quick builds print nothing but summaries. `build`, `watch`, `cell`
+//! and `sdf` show them ([`on_stderr`]). The stages and the builder both depend on this
+//! module, not on each other for it.
 //!
 //! Invariants:
 //! - Every running stage has a display (a bar when it counts steps, else a spinner), and it
@@ -46,6 +47,17 @@ impl Progress for NoProgress {
 impl StageProgress for NoProgress {
     fn advance(&self, _: usize) {}
     fn phase(&self, _: &str) {}
+}
+
+/// [`Bars`] on stderr when it is a terminal and the command is not quiet, else
+/// [`NoProgress`]: piped or captured output holds nothing but what the command prints.
+pub fn on_stderr(quiet: bool) -> Box<dyn Progress> {
+    use std::io::IsTerminal;
+    if !quiet && std::io::stderr().is_terminal() {
+        Box::new(Bars::new())
+    } else {
+        Box::new(NoProgress)
+    }
 }
 
 /// How long a stage runs before its display appears.

@@ -6,7 +6,7 @@
 //!
 //! The JSON is a contract with programs (`docs/report.schema.json`, against which the tests
 //! validate every example's reports): each report says [`SCHEMA_VERSION`], the tool's version,
-//! its units and the output's parameters, and `--report` lists a [`FailedOutput`] for each
+//! its units, the output's parameters as given and as resolved, and `--report` lists a [`FailedOutput`] for each
 //! output that did not build. A field that changes meaning or goes raises the version.
 
 use serde::Serialize;
@@ -116,6 +116,10 @@ pub struct Report {
     /// The output's `[outputs.NAME]` table as the build read it, after `--set` and `--unset`
     /// (defaults not filled in).
     pub parameters: serde_json::Value,
+    /// What the build used ([`Manifest::resolved`]): the output's keys with every default
+    /// filled in from the parsed manifest, and the referenced cell's (and scaffold's) table
+    /// with its `name`. The written files' stamps (3MF metadata) carry the same values.
+    pub resolved: serde_json::Value,
 }
 
 /// An output that did not build, as `--report` lists it beside the reports of those that did.
@@ -165,6 +169,9 @@ impl Report {
                 .parameters
                 .get(&result.name)
                 .cloned()
+                .unwrap_or_else(|| serde_json::Value::Object(Default::default())),
+            resolved: manifest
+                .resolved(&result.name)
                 .unwrap_or_else(|| serde_json::Value::Object(Default::default())),
             defects: defects(s.watertight, s.manifold, planar),
             estimate: None,

@@ -79,6 +79,77 @@ fn reports_say_their_schema_tool_units_and_parameters() {
     assert_eq!(file["parameters"], expected);
 }
 
+/// `(dotted name, value)` of every leaf of `value`'s nested objects.
+fn leaves(prefix: &str, value: &serde_json::Value, out: &mut Vec<(String, serde_json::Value)>) {
+    match value {
+        serde_json::Value::Object(table) => {
+            for (key, v) in table {
+                let name = if prefix.is_empty() {
+                    key.clone()
+                } else {
+                    format!("{prefix}.{key}")
+                };
+                leaves(&name, v, out);
+            }
+        }
+        leaf => out.push((prefix.to_string(), leaf.clone())),
+    }
+}
+
+#[test]
+fn resolved_parameters_fill_in_defaults_and_the_3mf_metadata_says_the_same() {
+    let p = Project::new(BLOCK);
+    let reports = p.build(&[
+        "--set",
+        "outputs.g.offset=0.25",
+        "--set",
+        "outputs.g.formats=[\"3mf\"]",
+    ]);
+    assert_valid("report.schema.json", &reports, "the --report array");
+    let r = &by_name(&reports, "g")["resolved"];
+    // The value set, the defaults of docs/manifest.md, the cell's table.
+    assert_eq!(r["offset"], 0.25);
+    assert_eq!(r["solid"], "inside");
+    assert_eq!(r["cell_size"], serde_json::json!([1.0, 1.0, 1.0]));
+    assert_eq!(r["samples"], serde_json::json!([17, 17, 17]));
+    assert_eq!(r["domain"]["max"], serde_json::json!([1.0, 1.0, 1.0]));
+    assert_eq!(r["formats"], serde_json::json!(["3mf"]));
+    assert_eq!(r["ascii"], false);
+    assert_eq!(r["path"], "g");
+    assert_eq!(r["keep"], "all");
+    assert_eq!(
+        r["cell"],
+        serde_json::json!({ "name": "g", "tpms": "gyroid" })
+    );
+    // Every leaf is a `latticebuild:` metadata entry of the 3MF reading back as the same
+    // value (a string as itself, anything else as JSON), and there is no other.
+    let bytes = std::fs::read(p.out("g.3mf")).expect("g.3mf");
+    let model = latticebuild_geom::mesh_read::read_3mf(&bytes).expect("a 3MF");
+    let stamped: std::collections::BTreeMap<&str, &str> = model
+        .metadata
+        .iter()
+        .filter_map(|(n, v)| Some((n.strip_prefix("latticebuild:")?, v.as_str())))
+        .collect();
+    let mut expected = Vec::new();
+    leaves("", r, &mut expected);
+    assert_eq!(stamped.len(), expected.len(), "{stamped:?}");
+    for (name, leaf) in expected {
+        let text = stamped
+            .get(name.as_str())
+            .unwrap_or_else(|| panic!("no {name}"));
+        let back = match leaf {
+            serde_json::Value::String(_) => serde_json::Value::String(text.to_string()),
+            _ => serde_json::from_str(text).unwrap_or_else(|e| panic!("{name}: {text}: {e}")),
+        };
+        assert_eq!(back, leaf, "{name}");
+    }
+    let application = model.metadata.iter().find(|(n, _)| n == "Application");
+    assert_eq!(
+        application.map(|(_, v)| v.as_str()),
+        Some(concat!("latticebuild ", env!("CARGO_PKG_VERSION")))
+    );
+}
+
 #[test]
 fn no_formats_writes_nothing_and_reports_the_same_numbers() {
     let p = Project::new(BLOCK);
@@ -91,7 +162,7 @@ fn no_formats_writes_nothing_and_reports_the_same_numbers() {
     let strip = |r: &serde_json::Value| {
         let mut r = r.clone();
         let map = r.as_object_mut().expect("object");
-        for volatile in ["files", "stages", "parameters", "estimate"] {
+        for volatile in ["files", "stages", "parameters", "resolved", "estimate"] {
             map.remove(volatile);
         }
         r

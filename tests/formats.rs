@@ -352,7 +352,9 @@ fn python_readers_take_our_3mf_and_vtu() {
         "{lib}"
     );
     assert_eq!(metadata["Title"], "block", "{lib}");
-    assert_eq!(metadata["cell"], "g", "{lib}");
+    // The report's `resolved`, leaf by leaf (lib3mf drops the `latticebuild:` prefix).
+    assert_eq!(metadata["cell.name"], "g", "{lib}");
+    assert_eq!(metadata["samples"], "[25,25,25]", "{lib}");
 
     let other = python(
         READ_WITH_TRIMESH_AND_MESHIO,

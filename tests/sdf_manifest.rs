@@ -45,8 +45,8 @@ fn a_program_gives_the_same_mesh_as_the_sdf_command() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    // The build's file names the tool and the units in header comments; the command's does
-    // not (it has no manifest, so no units): the rest must be the same bytes.
+    // Header comments name the tool and the units (the command's its `--units`, default mm):
+    // the rest must be the same bytes.
     let uncommented = |bytes: Vec<u8>| -> Vec<u8> {
         let end = bytes
             .windows(11)

@@ -16,7 +16,7 @@ use latticebuild_geom::symmetric::Group;
 use super::{Failure, ManifestArgs, compile, load_manifest, open_cache};
 use crate::build::Builder;
 use crate::files::OutputDir;
-use crate::progress::NoProgress;
+use crate::progress;
 use crate::stages::symmetric::{AutoSummary, FittedPayload, Measures, OptimizationSummary};
 
 #[derive(Args, Debug, Clone)]
@@ -71,9 +71,12 @@ pub fn run(args: &CellArgs) -> Result<(), Failure> {
         .map_err(|c| Failure::Usage(format!("error: {c}\n")))?;
     let cache = open_cache(&manifest.path, true)?;
     let sink = OutputDir::new(manifest.out_dir.clone());
-    let payload = Builder::new(&graph, &cache, &sink, &NoProgress)
+    // A fit can take minutes (N = 512, `n = "auto"`): its stages show bars like a build's.
+    let bars = progress::on_stderr(false);
+    let payload = Builder::new(&graph, &cache, &sink, bars.as_ref())
         .build_node(node)
         .map_err(|e| Failure::Build(e.to_string()))?;
+    drop(bars);
     let fitted = crate::stages::symmetric::FittedPayload::from_bytes(&payload)
         .map_err(|e| Failure::Build(e.to_string()))?;
     let report = report(&args.name, &fitted, &group, &points).map_err(Failure::Build)?;

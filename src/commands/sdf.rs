@@ -8,7 +8,9 @@
 //! three counts; `-b` the box, six numbers; `-o` the output file, `out.ply` by default, its
 //! format chosen by its extension. Without `-b` the box is the solid's bounds, with the paper's
 //! box rule where it is unbounded; without `-s`, 60³ samples. `--contour tetrahedra` contours
-//! by marching tetrahedra instead of marching cubes.
+//! by marching tetrahedra instead of marching cubes. The file is stamped as a build's
+//! outputs are (tool version, `--units`, default `mm`; in 3MF metadata the program, box,
+//! samples and contouring), and a contouring past half a second shows a bar on a terminal.
 //!
 //! Exit codes as for `build`: 0 written, 2 bad arguments or program, 1 nothing could be
 //! written. One summary line on stderr, like the build's.
@@ -26,7 +28,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use latticebuild_geom::contour::Contouring;
-use latticebuild_geom::mesh_io::{self, Encoding, Format};
+use latticebuild_geom::mesh_io::{self, Encoding, Format, Stamp, Units};
 use latticebuild_geom::stack_lang::{
     self, Aabb, ExternalField, ExternalSolids, IncludeResolver, Included, Program, Word,
 };
@@ -36,7 +38,7 @@ use clap::Args;
 use super::Failure;
 use crate::budget;
 use crate::files::{output_problem, read_input, read_input_text, write_user_file};
-use crate::progress::NoProgress;
+use crate::progress;
 use crate::stages::program::{box_text, contour_field, mesh_field};
 
 #[derive(Args, Debug, Clone)]
@@ -99,6 +101,8 @@ struct Options {
     contouring: Contouring,
     domain: Option<Aabb>,
     output: PathBuf,
+    /// `--units mm`: what the program's lengths are in, for the file's header.
+    units: Units,
     quiet: bool,
     /// `--allow-large`: contour even what seems too big for the machine.
     allow_large: bool,
@@ -116,6 +120,7 @@ impl Options {
             contouring: Contouring::Cubes,
             domain: None,
             output: PathBuf::from("out.ply"),
+            units: Units::Millimeter,
             quiet: false,
             allow_large: false,
             words: Vec::new(),
@@ -131,6 +136,7 @@ impl Options {
                 "-b" | "--bounds" => "-b",
                 "-o" | "--output" => "-o",
                 "--contour" => "--contour",
+                "--units" => "--units",
                 "-q" | "--quiet" => {
                     options.quiet = true;
                     continue;
@@ -168,6 +174,15 @@ impl Options {
                         ))
                     })?;
                 }
+                "--units" => {
+                    options.units = Units::from_name(&value).ok_or_else(|| {
+                        usage(format_args!(
+                            "{} `--units {value}`: expected `mm` (the default), `cm`, `m`, \
+                             `um` or `in`",
+                            word.origin
+                        ))
+                    })?;
+                }
                 _ => options.output = PathBuf::from(value),
             }
         }
@@ -180,6 +195,7 @@ fn example(flag: &str) -> &'static str {
         "-s" => "a total like `100^3` or three counts like `100,50,50`",
         "-b" => "six numbers `x0,y0,z0,x1,y1,z1`",
         "--contour" => "`cubes` or `tetrahedra`",
+        "--units" => "`mm`, `cm`, `m`, `um` or `in`",
         _ => "a file name like `out.stl`",
     }
 }
@@ -234,19 +250,25 @@ fn command(args: &[String]) -> Result<(), Failure> {
         }
     }
     let samples = |_: &Aabb| Ok(options.samples);
+    let bars = progress::on_stderr(options.quiet);
+    let stage = bars.start("sdf", options.samples[2] as u64 - 1);
     let contoured = contour_field(
         &field,
         options.contouring,
         Some(domain),
         &samples,
-        &NoProgress,
+        stage.as_ref(),
     )
     .map_err(|e| Failure::Build(format!("{e}: `{shown}` was not written")))?;
     let (mesh, check, domain) = (&contoured.mesh, &contoured.check, &contoured.domain);
+    stage.phase("writing");
+    let stamp = stamp(&options, &program, domain);
     write_user_file(&options.output, &mut |w| {
-        mesh_io::write_mesh(mesh, format, Encoding::Binary, w)
+        mesh_io::write_mesh_stamped(mesh, format, Encoding::Binary, &stamp, w)
     })
     .map_err(|e| Failure::Build(format!("cannot write `{shown}`: {e}")))?;
+    drop(stage);
+    drop(bars);
     if !options.quiet {
         let validity = match (check.watertight, check.manifold) {
             (true, true) => "watertight, manifold".to_string(),
@@ -274,6 +296,33 @@ fn command(args: &[String]) -> Result<(), Failure> {
         )));
     }
     Ok(())
+}
+
+/// What the written file says about itself, as a build's output does: the tool and its
+/// version, `--units`, the file's stem as title, and the parameters in the names of an SDF
+/// output's resolved ones (`sdf` in canonical text, `bounds`, `samples`, `contour`).
+fn stamp(options: &Options, program: &Program, domain: &Aabb) -> Stamp {
+    let json = |v: &[f64; 3]| serde_json::json!(v).to_string();
+    let parameters = [
+        ("sdf", program.canonical()),
+        ("bounds.min", json(&domain.min)),
+        ("bounds.max", json(&domain.max)),
+        ("samples", serde_json::json!(options.samples).to_string()),
+        ("contour", options.contouring.name().to_string()),
+    ];
+    Stamp {
+        generator: format!("latticebuild {}", env!("CARGO_PKG_VERSION")),
+        units: Some(options.units),
+        title: options
+            .output
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        parameters: parameters
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v))
+            .collect(),
+    }
 }
 
 fn output_format(path: &Path) -> Result<Format, Failure> {

@@ -31,9 +31,13 @@ use crate::stages::warnings;
 use crate::stages::write::{self, WriteStage};
 use latticebuild_geom::mesh_io::Units;
 
-/// A parameter of a written file's stamp.
-fn p(name: &str, value: impl Into<String>) -> (String, String) {
-    (name.to_string(), value.into())
+/// The parameters a written file's stamp carries: the output's resolved parameters, as the
+/// report's `resolved` gives them (`manifest::flatten`).
+fn stamp_parameters(manifest: &Manifest, name: &str) -> Vec<(String, String)> {
+    manifest
+        .resolved(name)
+        .map(|r| crate::manifest::flatten(&r))
+        .unwrap_or_default()
 }
 
 /// Index of a node in [`Graph::nodes`].
@@ -258,22 +262,7 @@ impl Graph {
                 inputs.push(graph.density(&output.cell, density, cell_node));
             }
             let contour = graph.push(format!("contour:{name}"), stage, inputs);
-            let parameters = vec![
-                p("cell", &output.cell),
-                p("solid", format!("{:?}", output.solid)),
-                p("sizing", format!("{:?}", output.sizing)),
-                p(
-                    "domain",
-                    format!("{:?} {:?}", output.domain_min, output.domain_max),
-                ),
-                p("cell_size", format!("{:?}", output.cell_size)),
-                p("samples", format!("{:?}", output.samples)),
-                p(
-                    "within",
-                    output.within.as_ref().map_or("", |f| f.given.as_str()),
-                ),
-            ];
-            let stamp = write::stamp(name, &manifest.units, parameters);
+            let stamp = write::stamp(name, &manifest.units, stamp_parameters(manifest, name));
             let write = WriteStage::new(output, manifest.report, stamp);
             let domain = Some([output.domain_min, output.domain_max]);
             let preview = preview(
@@ -299,14 +288,7 @@ impl Graph {
                 // A program's box is its solid's or the user's, not the lattice's: the void
                 // round a part filled by a program (a ball of gyroid) is not a pore.
                 pore_box: None,
-                stamp: write::stamp(
-                    name,
-                    &manifest.units,
-                    vec![
-                        p("bounds", format!("{:?}", output.bounds)),
-                        p("resolution", format!("{:?}", output.resolution)),
-                    ],
-                ),
+                stamp: write::stamp(name, &manifest.units, stamp_parameters(manifest, name)),
             };
             let preview = preview(manifest, name, &output.stem, None, false);
             graph.finish_output(name, &output.islands, solid, write, preview);
@@ -334,17 +316,7 @@ impl Graph {
                 stem: output.stem.clone(),
                 report: manifest.report,
                 pore_box: None,
-                stamp: write::stamp(
-                    name,
-                    &manifest.units,
-                    vec![
-                        p("scaffold", &output.scaffold),
-                        p("cell", &output.cell),
-                        p("solid", format!("{:?}", output.solid)),
-                        p("sizing", format!("{:?}", output.sizing)),
-                        p("resolution", output.resolution.to_string()),
-                    ],
-                ),
+                stamp: write::stamp(name, &manifest.units, stamp_parameters(manifest, name)),
             };
             let preview = preview(manifest, name, &output.stem, None, false);
             graph.finish_output(name, &output.islands, tiled, write, preview);

@@ -26,12 +26,14 @@ mod expression;
 pub mod model;
 mod overrides;
 mod parameters;
+mod resolved;
 mod schema;
 mod source;
 #[cfg(test)]
 mod tests;
 
 pub use model::*;
+pub use resolved::flatten;
 pub use schema::output_files::output_paths;
 
 use source::{Report, Sources};

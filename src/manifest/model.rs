@@ -44,6 +44,10 @@ pub struct Manifest {
     pub inputs: Vec<PathBuf>,
     /// Each output's table as read after `--set`/`--unset`, as JSON (a report's `parameters`).
     pub parameters: BTreeMap<String, serde_json::Value>,
+    /// Each `[cells.NAME]` and `[scaffolds.NAME]` table as read, the same way (for an
+    /// output's resolved parameters, `Manifest::resolved`).
+    pub cell_tables: BTreeMap<String, serde_json::Value>,
+    pub scaffold_tables: BTreeMap<String, serde_json::Value>,
     /// How many bytes of entries the stage cache may keep (`[cache] max_size`).
     pub cache_max_size: u64,
 }

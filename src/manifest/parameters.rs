@@ -7,7 +7,9 @@
 //!   tables as themselves; integers as JSON integers; floats as JSON numbers (a non-finite
 //!   float cannot pass validation, and would be `null`); a date-time as its text.
 //! - Defaults are not filled in: a key absent from the table is absent here (the manifest
-//!   reference documents each default), so the object says what the caller asked for.
+//!   reference documents each default), so the object says what the caller asked for;
+//!   `resolved.rs` fills them in from the model. Cells' and scaffolds' tables are kept the
+//!   same way, for it.
 
 use std::collections::BTreeMap;
 
@@ -17,7 +19,12 @@ use toml::de::{DeTable, DeValue};
 /// Every output's table by name (an output that is not a table is left out: validation
 /// reports it).
 pub(crate) fn of_outputs(root: &DeTable<'_>) -> BTreeMap<String, serde_json::Value> {
-    let Some(DeValue::Table(outputs)) = root.get("outputs").map(Spanned::get_ref) else {
+    of_tables(root, "outputs")
+}
+
+/// Every table of `[section.NAME]` by name (`cells`, `scaffolds`, `outputs`), the same way.
+pub(crate) fn of_tables(root: &DeTable<'_>, section: &str) -> BTreeMap<String, serde_json::Value> {
+    let Some(DeValue::Table(outputs)) = root.get(section).map(Spanned::get_ref) else {
         return BTreeMap::new();
     };
     outputs

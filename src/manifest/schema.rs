@@ -211,6 +211,8 @@ pub(crate) fn validate(
         scaffolds,
         tiled_outputs,
         parameters: super::parameters::of_outputs(root),
+        cell_tables: super::parameters::of_tables(root, "cells"),
+        scaffold_tables: super::parameters::of_tables(root, "scaffolds"),
         cache_max_size: cache_max_size?,
     };
     output_files::check_collisions(&manifest, outputs_table, checker.report);

@@ -532,6 +532,11 @@ fn defaults_are_filled_in() {
                 "samples": 32
             }),
         )]),
+        cell_tables: BTreeMap::from([(
+            "gyroid".to_string(),
+            serde_json::json!({ "tpms": "gyroid" }),
+        )]),
+        scaffold_tables: BTreeMap::new(),
         cache_max_size: 4_000_000_000,
     };
     assert_eq!(manifest, expected);

@@ -103,11 +103,7 @@ pub fn stamp(name: &str, units: &str, parameters: Vec<(String, String)>) -> Stam
         generator: format!("latticebuild {}", env!("CARGO_PKG_VERSION")),
         units: Some(Units::from_name(units).expect("the manifest checks `units`")),
         title: name.to_string(),
-        // A parameter left unset (`within` of an output with no part) says nothing.
-        parameters: parameters
-            .into_iter()
-            .filter(|(_, v)| !v.is_empty())
-            .collect(),
+        parameters,
     }
 }
 

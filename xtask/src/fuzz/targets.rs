@@ -78,6 +78,15 @@ pub const TARGETS: &[Target] = &[
         hidden: false,
     },
     Target {
+        name: "mesh-3mf",
+        about: "mesh_read::read as 3MF: the package as given, and (when it is not a zip) the \
+                input as the model part of a package made for it, so XML mutations are not \
+                all stopped by the CRC",
+        run: |b, _| threemf_target(b),
+        extensions: &["3mf", "model"],
+        hidden: false,
+    },
+    Target {
         name: "scaffold-msh",
         about: "scaffold::read_scaffold of a .msh (Gmsh 2.2/4.1, ASCII/binary), then check and facets",
         run: |b, _| scaffold_target(b, "msh"),
@@ -242,6 +251,72 @@ fn mesh(bytes: &[u8], format: Format) -> String {
             )
         }
     }
+}
+
+/// A 3MF package as the build reads it; input that is not a zip archive is also read as the
+/// model part of a package made round it (stored, CRC right), which reaches the XML scanner.
+fn threemf_target(bytes: &[u8]) -> String {
+    let package = mesh(bytes, Format::ThreeMf);
+    if bytes.starts_with(b"PK") {
+        return package;
+    }
+    let wrapped = stored_zip(&[("3D/3dmodel.model", bytes)]);
+    format!("{package} | model {}", mesh(&wrapped, Format::ThreeMf))
+}
+
+/// A zip archive of `parts`, stored (method 0), with the CRC-32s right.
+fn stored_zip(parts: &[(&str, &[u8])]) -> Vec<u8> {
+    fn crc32(bytes: &[u8]) -> u32 {
+        let mut crc = 0xFFFF_FFFFu32;
+        for &b in bytes {
+            crc ^= u32::from(b);
+            for _ in 0..8 {
+                crc = if crc & 1 == 1 {
+                    (crc >> 1) ^ 0xEDB8_8320
+                } else {
+                    crc >> 1
+                };
+            }
+        }
+        !crc
+    }
+    // Fuzz inputs are small (far below 4 GiB), so 32-bit sizes and offsets hold them.
+    let le16 = |v: usize| (v as u16).to_le_bytes();
+    let le32 = |v: usize| (v as u32).to_le_bytes();
+    let mut out = Vec::new();
+    let mut directory = Vec::new();
+    for (name, data) in parts {
+        let crc = crc32(data).to_le_bytes();
+        let offset = out.len();
+        out.extend(0x0403_4b50u32.to_le_bytes());
+        out.extend([20, 0, 0, 0, 0, 0, 0, 0, 0, 0]); // version, flags, method 0, time, date
+        out.extend(crc);
+        out.extend(le32(data.len()));
+        out.extend(le32(data.len()));
+        out.extend(le16(name.len()));
+        out.extend(le16(0));
+        out.extend(name.as_bytes());
+        out.extend(*data);
+        directory.extend(0x0201_4b50u32.to_le_bytes());
+        directory.extend([20, 0, 20, 0, 0, 0, 0, 0, 0, 0, 0, 0]); // made by, needed, flags, method, time, date
+        directory.extend(crc);
+        directory.extend(le32(data.len()));
+        directory.extend(le32(data.len()));
+        directory.extend(le16(name.len()));
+        directory.extend([0; 12]); // extra, comment, disk, internal and external attributes
+        directory.extend(le32(offset));
+        directory.extend(name.as_bytes());
+    }
+    let start = out.len();
+    out.extend(&directory);
+    out.extend(0x0605_4b50u32.to_le_bytes());
+    out.extend([0; 4]); // disk numbers
+    out.extend(le16(parts.len()));
+    out.extend(le16(parts.len()));
+    out.extend(le32(directory.len()));
+    out.extend(le32(start));
+    out.extend(le16(0));
+    out
 }
 
 /// scaffold/mod.rs: a returned scaffold has one kind, valid indices, finite coordinates, and

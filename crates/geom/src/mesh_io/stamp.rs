@@ -102,7 +102,8 @@ pub struct Stamp {
     /// A title (the output's name); empty: none.
     pub title: String,
     /// Name and value of each parameter the mesh was made with, for formats with metadata
-    /// (3MF). Names are letters, digits and `_`; others are replaced by `_` where written.
+    /// (3MF). Names are letters, digits, `_` and `.` (a nested key, `cell.name`); others are
+    /// replaced by `_` where written.
     pub parameters: Vec<(String, String)>,
 }
 

@@ -158,7 +158,7 @@ fn model_header(stamp: &Stamp) -> String {
     for (name, value) in &stamp.parameters {
         let name: String = name
             .chars()
-            .map(|c| match c.is_ascii_alphanumeric() {
+            .map(|c| match c.is_ascii_alphanumeric() || c == '.' {
                 true => c,
                 false => '_',
             })

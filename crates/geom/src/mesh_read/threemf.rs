@@ -12,7 +12,10 @@
 //! - `<build>`'s `<item objectid transform>`s: each places its object (and its components,
 //!   transforms composed) in the soup. A transform `m00 … m32` maps `(x, y, z)` to
 //!   `(x, y, z, 1)·M` as the specification defines; a mirroring one (negative determinant)
-//!   reverses the triangles so they stay counter-clockwise from outside.
+//!   reverses the triangles so they stay counter-clockwise from outside. What the items place
+//!   is counted first: more than [`MAX_INSTANCING`] times what the model defines is refused
+//!   before anything is copied.
+//! - `<metadata name>` text (our writer's stamp: `latticebuild:…` parameters), as given.
 //!
 //! Entities, comments, processing instructions and CDATA are skipped where they may stand;
 //! numbers must be plain (no entity). Errors name the model's line (counted from 1), or the
@@ -31,10 +34,18 @@ pub struct ThreeMf {
     pub unit: String,
     /// The length of that unit in millimetres.
     pub unit_mm: f64,
+    /// The model's `<metadata name>` elements, name (prefix kept) and text (entities of
+    /// XML's five replaced), in order.
+    pub metadata: Vec<(String, String)>,
 }
 
 /// Components nest at most this deep (deeper is taken for a cycle).
 const MAX_DEPTH: usize = 32;
+
+/// The build items place at most this many times the vertices and triangles the model
+/// defines: copies of a part are common, a fan of components sharing objects level by level
+/// is a bomb (a few hundred bytes placing billions of triangles).
+const MAX_INSTANCING: u64 = 4096;
 
 fn zip_error(e: ZipError) -> MeshReadError {
     MeshReadError::Unexpected {
@@ -127,6 +138,7 @@ fn parse_model(xml: &[u8]) -> Result<ThreeMf, MeshReadError> {
     let mut items: Vec<(u32, Transform, usize)> = Vec::new();
     let mut stack: Vec<Vec<u8>> = Vec::new();
     let mut saw_model = false;
+    let mut metadata = Vec::new();
     loop {
         let tag = match scanner.next() {
             Ok(Some(tag)) => tag,
@@ -219,6 +231,16 @@ fn parse_model(xml: &[u8]) -> Result<ThreeMf, MeshReadError> {
                     object.components.push((id, m, at));
                 }
             }
+            (b"model", b"metadata") => {
+                let name = scanner.attr(b"name").unwrap_or_default();
+                let name = String::from_utf8_lossy(name).into_owned();
+                let text = if tag.empty {
+                    String::new()
+                } else {
+                    scanner.text()
+                };
+                metadata.push((name, text));
+            }
             (b"build", b"item") => {
                 let id = scanner.index(b"objectid", at)?;
                 items.push((id, scanner.transform(at)?, at));
@@ -245,6 +267,27 @@ fn parse_model(xml: &[u8]) -> Result<ThreeMf, MeshReadError> {
             });
         }
     };
+    // Components may share an object many times over (each of 32 levels naming the next
+    // twice is 2^32 copies): what the items place is counted before anything is copied.
+    let mut placed = HashMap::new();
+    let defined: u64 = objects
+        .values()
+        .map(|o| (o.positions.len() + o.triangles.len()) as u64)
+        .sum();
+    let mut total = 0u64;
+    for &(id, _, at) in &items {
+        total = total.saturating_add(size_placed(&objects, id, 0, at, &scanner, &mut placed)?);
+    }
+    if total > MAX_INSTANCING.saturating_mul(defined.max(1)) {
+        return Err(MeshReadError::Unsupported {
+            format: Format::ThreeMf,
+            at: Location::Line(1),
+            what: format!(
+                "build items that place {total} vertices and triangles, over {MAX_INSTANCING} \
+                 times the {defined} the model defines"
+            ),
+        });
+    }
     let mut soup = TriangleSoup::default();
     for (id, m, at) in items {
         place(&objects, id, &m, 0, at, &scanner, &mut soup)?;
@@ -253,7 +296,43 @@ fn parse_model(xml: &[u8]) -> Result<ThreeMf, MeshReadError> {
         soup,
         unit,
         unit_mm,
+        metadata,
     })
+}
+
+/// The vertices and triangles placing object `id` adds (saturating), memoised by object; an
+/// unknown object or nesting past [`MAX_DEPTH`] is the error [`place`] would give.
+fn size_placed(
+    objects: &HashMap<u32, Object>,
+    id: u32,
+    depth: usize,
+    at: usize,
+    scanner: &Scanner,
+    memo: &mut HashMap<u32, u64>,
+) -> Result<u64, MeshReadError> {
+    if let Some(&size) = memo.get(&id) {
+        return Ok(size);
+    }
+    let object = objects.get(&id).ok_or_else(|| {
+        scanner.unexpected(at, "an object id defined in the resources", format!("{id}"))
+    })?;
+    if depth > MAX_DEPTH {
+        return Err(MeshReadError::Unsupported {
+            format: Format::ThreeMf,
+            at: Location::Line(scanner.line_of(at)),
+            what: format!("components nested over {MAX_DEPTH} deep (a cycle?)"),
+        });
+    }
+    if !object.is_model {
+        return Ok(0);
+    }
+    let mut size = (object.positions.len() + object.triangles.len()) as u64;
+    for &(child, _, cat) in &object.components {
+        let child = size_placed(objects, child, depth + 1, cat, scanner, memo)?;
+        size = size.saturating_add(child);
+    }
+    memo.insert(id, size);
+    Ok(size)
 }
 
 /// Appends object `id` under `m` to `soup`.
@@ -286,6 +365,19 @@ fn place(
     })?;
     soup.positions
         .extend(object.positions.iter().map(|&p| apply(m, p)));
+    // Finite numbers composed can overflow (`-1e308` times 2): a soup's coordinates are finite.
+    if let Some(i) = soup.positions[first as usize..]
+        .iter()
+        .position(|p| p.iter().any(|c| !c.is_finite()))
+    {
+        return Err(MeshReadError::Unsupported {
+            format: Format::ThreeMf,
+            at: Location::Line(scanner.line_of(at)),
+            what: format!(
+                "a transform placing vertex {i} of object {id} beyond the finite numbers"
+            ),
+        });
+    }
     let mirrored = determinant(m) < 0.0;
     soup.triangles.extend(object.triangles.iter().map(|t| {
         let t = t.map(|i| i + first);
@@ -443,6 +535,19 @@ impl<'a> Scanner<'a> {
         }
     }
 
+    /// The text from here to the next tag, with XML's five entities replaced (others kept
+    /// as written: 3MF metadata is plain text).
+    fn text(&self) -> String {
+        let rest = &self.xml[self.pos.min(self.xml.len())..];
+        let end = rest.iter().position(|&b| b == b'<').unwrap_or(rest.len());
+        let raw = String::from_utf8_lossy(&rest[..end]);
+        raw.replace("&lt;", "<")
+            .replace("&gt;", ">")
+            .replace("&quot;", "\"")
+            .replace("&apos;", "'")
+            .replace("&amp;", "&")
+    }
+
     /// The `>` ending the tag at `at`, outside quoted values.
     fn tag_end(&self, at: usize) -> Result<usize, (usize, String)> {
         let mut quote = None;
@@ -565,6 +670,40 @@ mod tests {
         // Mirrored, so its triangles are reversed.
         assert_eq!(model.soup.triangles[4], [4, 5, 6]);
         assert_eq!(model.soup.triangles[0], [0, 2, 1]);
+        assert_eq!(model.metadata, [("Title".to_string(), "a & b".to_string())]);
+    }
+
+    /// A chain of objects each naming the next twice places 2^depth copies: refused before
+    /// any is made, while a plain copy of a part many times over still reads.
+    #[test]
+    fn fanned_out_components_are_refused_before_copying() {
+        let tet = r#"<object id="0"><mesh><vertices><vertex x="0" y="0" z="0"/>
+<vertex x="1" y="0" z="0"/><vertex x="0" y="1" z="0"/><vertex x="0" y="0" z="1"/></vertices>
+<triangles><triangle v1="0" v2="2" v3="1"/><triangle v1="0" v2="1" v3="3"/>
+<triangle v1="0" v2="3" v3="2"/><triangle v1="1" v2="2" v3="3"/></triangles></mesh></object>"#;
+        let model = |levels: u32, copies: u32| {
+            let mut xml = format!("<model><resources>{tet}");
+            for level in 1..=levels {
+                xml.push_str(&format!("<object id=\"{level}\"><components>"));
+                for _ in 0..copies {
+                    xml.push_str(&format!("<component objectid=\"{}\"/>", level - 1));
+                }
+                xml.push_str("</components></object>");
+            }
+            xml.push_str(&format!(
+                "</resources><build><item objectid=\"{levels}\"/></build></model>"
+            ));
+            xml
+        };
+        let started = std::time::Instant::now();
+        let e = parse_model(model(32, 2).as_bytes()).expect_err("a bomb");
+        assert!(e.to_string().contains("over 4096 times"), "{e}");
+        assert!(started.elapsed().as_secs() < 5, "refused without copying");
+        // 2^12 = 4096 copies of 8 (4 vertices, 4 triangles) is the limit itself.
+        let copies = parse_model(model(12, 2).as_bytes()).expect("4096 copies");
+        assert_eq!(copies.soup.triangles.len(), 4 * 4096);
+        let e = parse_model(model(13, 2).as_bytes()).expect_err("8192 copies");
+        assert!(e.to_string().contains("place 65536"), "{e}");
     }
 
     /// Packages of our writer read back as the same floats and triangles, in each unit, with
@@ -587,7 +726,10 @@ mod tests {
                 let stamp = Stamp {
                     units: Some(units),
                     title: "a \"b\" <c>".into(),
-                    parameters: vec![("d e".into(), "&".into())],
+                    parameters: vec![
+                        ("d e".into(), "&".into()),
+                        ("cell.name".into(), "<g>".into()),
+                    ],
                     ..Stamp::default()
                 };
                 let mut bytes = Vec::new();
@@ -603,6 +745,15 @@ mod tests {
                     .collect();
                 assert_eq!(back, mesh.vertices);
                 assert_eq!(model.soup.triangles, mesh.triangles);
+                let text = |v: &str| v.to_string();
+                assert_eq!(
+                    model.metadata[2..],
+                    [
+                        (text("latticebuild:d_e"), text("&")),
+                        (text("latticebuild:cell.name"), text("<g>"))
+                    ]
+                );
+                assert_eq!(model.metadata[0], (text("Title"), text("a \"b\" <c>")));
             }
         }
     }
@@ -630,6 +781,12 @@ mod tests {
                 MODEL.replace("objectid=\"4\"", "objectid=\"7\""),
                 "line 15",
                 "found 7",
+            ),
+            (
+                // Object 3 moved to x >= 10 by the component, then scaled by -1e308.
+                MODEL.replace("transform=\"-1 0 0", "transform=\"-1e308 0 0"),
+                "line 13",
+                "vertex 0 of object 3 beyond the finite",
             ),
             (
                 MODEL.replace("</build>\n</model>\n", "</build"),
