@@ -5,8 +5,10 @@
 //! Surface area (the volume-only path below is unchanged, to the bit): the constraint value
 //! is the sharp marching area on the optimisation grid ([`super::measure`]), its gradient the
 //! curvature form `−w δ_ε(d) κ/|∇Φ|` fitted like the volume's (`objective.rs`); with both
-//! targets the steps solve the 2×2 system `J Jᵀ λ = r` (restoration) and go to `c₀ + Jᵀμ`
-//! (least change); residuals are scaled (`|V − V*|`, `|A − A*|/A*`).
+//! targets restoration takes trust-region steps in the plane of two smoothed gradient
+//! directions with a measured 2×2 Jacobian ([`Walk::plane_step`]: the gradients are nearly
+//! parallel and the area strongly convex across them), and least change goes to `c₀ + Jᵀμ`;
+//! residuals are scaled (`|V − V*|`, `|A − A*|/A*`).
 //!
 //! Method and why:
 //! - Problem: `min ‖c − c₀‖` subject to `V(c) = V*` (and, when asked, the face-normal rows
@@ -37,9 +39,12 @@
 //! - The smoothed `V` is biased by about `ε²` times the mean curvature of the surface; the
 //!   sharp share of samples with `Φ ≤ 0` on a grid twice as fine is measured, and the
 //!   smoothed target moved by the difference and restored (up to [`CORRECTIONS`] times).
-//! - Stop: converged when the least-change steps stall (less than 10⁻³ of `‖c − c₀‖`) and the
-//!   sharp fraction is within 10 × `tolerance`; otherwise, after `max_iterations` accepted
-//!   steps or when no step helps, `converged` is false and the report holds what was reached.
+//! - Stop: the least-change walk ends when its steps gain less than 10⁻³ of `‖c − c₀‖`.
+//!   `converged` means the targets are met as measured independently: the sharp measures on
+//!   the grid twice as fine within 10 × `tolerance` (not how the coarse-grid restorations
+//!   ended). A restoration that stalls (no step helps, or two steps take less than
+//!   [`STALL_PROGRESS`] off the residual) ends the run at once, `stalled` in the report: an
+//!   unreachable target stops in a few steps instead of spending `max_iterations`.
 //! - Grid: `N` clamped to [32, 64] in 3D and [64, 256] in 2D; a cell fitted on a finer grid
 //!   keeps its higher frequencies unchanged (the change lies in the grid's band).
 //!
