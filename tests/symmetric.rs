@@ -234,6 +234,29 @@ fn an_optimize_that_stops_short_warns_in_the_build_report() {
 }
 
 #[test]
+fn an_unreachable_optimize_stops_early_and_the_report_says_so() {
+    // An area density of 100 is out of reach for any field of frequencies at most 8 (the cell's
+    // 16 samples, the change band 6): by Crofton's bound its zero set has area density at most
+    // 6 · 8. The run stalls within a few steps instead of spending its 30.
+    let p = Project::new(&OPTIMIZED.replace("volume_fraction = 0.3", "surface_area = 100"));
+    let reports = p.build(&[]);
+    let warnings = common::by_name(&reports, "cube")["warnings"].to_string();
+    assert!(
+        warnings.contains("cell `w`: optimize did not reach its target")
+            && warnings.contains("out of reach")
+            && warnings.contains("not 100.0000"),
+        "{warnings}"
+    );
+    let out = p.run(&["cell", "lattice.toml", "w", "--json"]);
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    let o = &json["optimization"];
+    assert_eq!(o["converged"], false, "{o}");
+    assert_eq!(o["stalled"], true, "{o}");
+    let steps = o["iterations"].as_array().expect("iterations").len() - 1;
+    assert!(steps <= 6, "{o}");
+}
+
+#[test]
 fn optimized_cell_fills_its_fraction_and_lists_its_iterations() {
     let p = Project::new(OPTIMIZED);
     let reports = p.build(&[]);

@@ -21,7 +21,7 @@ use super::StageError;
 use crate::cache::{KeyBuilder, Param};
 use crate::manifest::{FitResolution, GroupSpec, MinkowskiOp, Symmetric};
 
-pub const VERSION: u32 = 4;
+pub const VERSION: u32 = 5;
 
 const SAMPLES_MAGIC: &[u8; 8] = b"LBSAMP01";
 
@@ -84,6 +84,11 @@ pub struct OptimizationSummary {
     /// The sharp volume fraction of the reference element reached.
     pub reached: f64,
     pub converged: bool,
+    /// Not converged because the residual stopped shrinking (the target is out of reach from
+    /// this cell), not because `max_iterations` ran out. Absent when false, so other payloads
+    /// keep their bytes.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub stalled: bool,
     /// `‖c − c₀‖`: the L² change of the field.
     pub change: f64,
     /// Per iterate (0: the cell before): the smoothed volume fraction, `‖c − c₀‖` and the
@@ -133,12 +138,21 @@ impl OptimizationSummary {
                     a.reached, a.target
                 ));
             }
-            format!(
-                "optimize did not converge in {} iterations: {}; raise `max_iterations` or loosen \
-                 `tolerance`",
-                self.iterations.len().saturating_sub(1),
-                missed.join(", and ")
-            )
+            let steps = self.iterations.len().saturating_sub(1);
+            if self.stalled {
+                format!(
+                    "optimize did not reach its target: it stopped after {steps} iterations \
+                     without progress, so the target is out of reach from this cell: {}; the \
+                     last cell is used",
+                    missed.join(", and ")
+                )
+            } else {
+                format!(
+                    "optimize did not converge in {steps} iterations: {}; raise \
+                     `max_iterations` or loosen `tolerance`",
+                    missed.join(", and ")
+                )
+            }
         })
     }
 }
@@ -473,6 +487,7 @@ impl ConstrainStage {
                 target: report.target,
                 reached: report.reached,
                 converged: report.converged,
+                stalled: report.stalled,
                 change: report.change,
                 iterations: report
                     .iterates

@@ -5,8 +5,10 @@
 //! Surface area (the volume-only path below is unchanged, to the bit): the constraint value
 //! is the sharp marching area on the optimisation grid ([`super::measure`]), its gradient the
 //! curvature form `−w δ_ε(d) κ/|∇Φ|` fitted like the volume's (`objective.rs`); with both
-//! targets the steps solve the 2×2 system `J Jᵀ λ = r` (restoration) and go to `c₀ + Jᵀμ`
-//! (least change); residuals are scaled (`|V − V*|`, `|A − A*|/A*`).
+//! targets restoration takes trust-region steps in the plane of two smoothed gradient
+//! directions with a measured 2×2 Jacobian ([`Walk::plane_step`]: the gradients are nearly
+//! parallel and the area strongly convex across them), and least change goes to `c₀ + Jᵀμ`;
+//! residuals are scaled (`|V − V*|`, `|A − A*|/A*`).
 //!
 //! Method and why:
 //! - Problem: `min ‖c − c₀‖` subject to `V(c) = V*` (and, when asked, the face-normal rows
@@ -37,9 +39,12 @@
 //! - The smoothed `V` is biased by about `ε²` times the mean curvature of the surface; the
 //!   sharp share of samples with `Φ ≤ 0` on a grid twice as fine is measured, and the
 //!   smoothed target moved by the difference and restored (up to [`CORRECTIONS`] times).
-//! - Stop: converged when the least-change steps stall (less than 10⁻³ of `‖c − c₀‖`) and the
-//!   sharp fraction is within 10 × `tolerance`; otherwise, after `max_iterations` accepted
-//!   steps or when no step helps, `converged` is false and the report holds what was reached.
+//! - Stop: the least-change walk ends when its steps gain less than 10⁻³ of `‖c − c₀‖`.
+//!   `converged` means the targets are met as measured independently: the sharp measures on
+//!   the grid twice as fine within 10 × `tolerance` (not how the coarse-grid restorations
+//!   ended). A restoration that stalls (no step helps, or two steps take less than
+//!   [`STALL_PROGRESS`] off the residual) ends the run at once, `stalled` in the report: an
+//!   unreachable target stops in a few steps instead of spending `max_iterations`.
 //! - Grid: `N` clamped to [32, 64] in 3D and [64, 256] in 2D; a cell fitted on a finer grid
 //!   keeps its higher frequencies unchanged (the change lies in the grid's band).
 //!
@@ -88,6 +93,35 @@ const SHARP_TOLERANCE_FACTOR: f64 = 10.0;
 const LEAST_CHANGE_HALVINGS: usize = 4;
 const RESTORE_STEPS: usize = 4;
 const LEAST_CHANGE_STALL: f64 = 1e-3;
+
+/// Restoration stalls when two accepted steps together take less than this share off the
+/// scaled residual (an unreachable target: the run stops instead of spending its budget).
+const STALL_PROGRESS: f64 = 0.1;
+
+/// Two constraints: the trust radius (and so the forward-difference probes of the Jacobian
+/// in the gradients' plane) stays at least [`PROBE`] in `‖c‖` (fields of order one; below it
+/// the sharp area's kinks would show), and gradients whose difference is less than
+/// [`PARALLEL`] of their length count as parallel.
+const PROBE: f64 = 1e-3;
+const PARALLEL: f64 = 1e-3;
+
+/// The trust radius of two-constraint steps in `‖c‖`: where it starts and its largest.
+const START_RADIUS: f64 = 0.05;
+
+/// The squared frequency at which [`Problem::smoothed`] halves a coefficient.
+const SMOOTHING: f64 = 4.0;
+const MAX_RADIUS: f64 = 0.2;
+
+/// How a restoration ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Outcome {
+    /// Within the tolerance (or stalled within ten times it).
+    Met,
+    /// The budget of steps ran out.
+    Budget,
+    /// No step helps or the residual stopped shrinking: the target is out of reach from here.
+    Stalled,
+}
 
 /// What to optimise for: a volume fraction (the original interface; see
 /// [`OptimizationTargets`] for the surface area).
@@ -145,7 +179,12 @@ pub struct Iterate {
 /// What [`FittedCell::optimize`] did.
 #[derive(Clone, Debug, PartialEq)]
 pub struct OptimizationReport {
+    /// The targets are met: the sharp measures on the grid twice as fine are within ten
+    /// times the tolerance.
     pub converged: bool,
+    /// Not converged because the residual stopped shrinking (an unreachable target), rather
+    /// than because the budget ran out.
+    pub stalled: bool,
     /// The volume-fraction target, if any.
     pub target: Option<f64>,
     /// The volume fraction reached: the share of samples with `Φ ≤ 0` on a grid twice as
@@ -242,6 +281,27 @@ impl Problem<'_> {
             .collect()
     }
 
+    /// `v` with each frequency's coefficient scaled by `1/(1 + |f|²/SMOOTHING)`, projected
+    /// again when the face-normal condition is kept (the scaling differs along a row's line
+    /// of frequencies): a direction that bends the surface less (module docs).
+    fn smoothed(&self, v: &Vector) -> Result<Vector, FitError> {
+        let scaled = Vector(
+            v.0.iter()
+                .map(|&(f, c)| {
+                    let f2: f64 = f.iter().map(|&a| f64::from(a * a)).sum();
+                    (f, c / (1.0 + f2 / SMOOTHING))
+                })
+                .collect(),
+        );
+        if !self.keep_face_normal {
+            return Ok(scaled);
+        }
+        let (projected, _) = scaled
+            .cell(self.start, self.n)
+            .constrain_normal_to_faces()?;
+        Ok(Vector::of(&projected))
+    }
+
     /// The fit of gradient samples, kept to the change band and projected (module docs).
     fn band_projection(&self, samples: &[f64]) -> Result<Vector, FitError> {
         let g = fit_samples(&self.start.group, self.grid, samples)?;
@@ -280,6 +340,60 @@ fn solve_gram(g: &[Vector], r: &[f64]) -> Option<Vec<f64>> {
         }
         _ => None,
     }
+}
+
+/// The 2×2 system `m x = r`; `None` when `m` is singular relative to its entries.
+fn solve2(m: [[f64; 2]; 2], r: &[f64]) -> Option<[f64; 2]> {
+    let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+    let size = (m[0][0] * m[1][1]).abs().max((m[0][1] * m[1][0]).abs());
+    if !det.is_finite() || det.abs() <= 1e-10 * size || size == 0.0 {
+        return None;
+    }
+    Some([
+        (m[1][1] * r[0] - m[0][1] * r[1]) / det,
+        (m[0][0] * r[1] - m[1][0] * r[0]) / det,
+    ])
+}
+
+/// The minimiser of `‖r − m a‖` over `‖a‖ ≤ radius`: the Newton step when it fits, else the
+/// Levenberg–Marquardt step `(mᵀm + μ) a = mᵀ r` whose length is the radius (μ by bisection
+/// on its logarithm; the length falls as μ grows).
+fn trust_region_step(m: [[f64; 2]; 2], r: [f64; 2], radius: f64) -> [f64; 2] {
+    if let Some(a) = solve2(m, &r)
+        && a[0].hypot(a[1]) <= radius
+    {
+        return a;
+    }
+    let mtm = [
+        [
+            m[0][0] * m[0][0] + m[1][0] * m[1][0],
+            m[0][0] * m[0][1] + m[1][0] * m[1][1],
+        ],
+        [
+            m[0][1] * m[0][0] + m[1][1] * m[1][0],
+            m[0][1] * m[0][1] + m[1][1] * m[1][1],
+        ],
+    ];
+    let mtr = [
+        m[0][0] * r[0] + m[1][0] * r[1],
+        m[0][1] * r[0] + m[1][1] * r[1],
+    ];
+    let size = mtm[0][0] + mtm[1][1];
+    let at = |mu: f64| {
+        let shifted = [[mtm[0][0] + mu, mtm[0][1]], [mtm[1][0], mtm[1][1] + mu]];
+        solve2(shifted, &mtr).unwrap_or([0.0, 0.0])
+    };
+    let (mut lo, mut hi) = ((1e-12 * size).ln(), (1e12 * size).ln());
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        let a = at(mid.exp());
+        if a[0].hypot(a[1]) > radius {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    at(hi.exp())
 }
 
 /// `c + Σ α λ_i g_i`, added one gradient at a time (for one constraint, exactly `c + αλg`).
@@ -359,7 +473,7 @@ impl FittedCell {
             at: None,
         };
         let mut iterates = Vec::new();
-        let mut met = true;
+        let mut outcome = Outcome::Met;
         // Continuation in ε: each band twice the next, the last the final one (module docs).
         let final_band = BAND_CELLS / grid as f64;
         let stages = (0..)
@@ -372,6 +486,7 @@ impl FittedCell {
             targets: targets.clone(),
             scales: &scales,
             budget: options.max_iterations,
+            radius: START_RADIUS,
             iterates: &mut iterates,
         };
         for stage in (0..stages).rev() {
@@ -387,9 +502,15 @@ impl FittedCell {
             } else {
                 options.tolerance.max(STAGE_TOLERANCE)
             };
-            met = walk.restore(&mut state, tolerance)?;
+            outcome = walk.restore(&mut state, tolerance)?;
+            if outcome == Outcome::Stalled {
+                // Out of reach: stop here rather than spend the budget (module docs).
+                break;
+            }
         }
-        let mut converged = met && walk.least_change(&mut state, options.tolerance)?;
+        if outcome == Outcome::Met {
+            walk.least_change(&mut state, options.tolerance)?;
+        }
         // Defect correction: the smoothed values are biased by about ε² times curvatures;
         // aim the smoothed targets off by the sharp measures' differences (module docs).
         let sharp = |cell: &FittedCell, kind: Kind| match kind {
@@ -407,20 +528,38 @@ impl FittedCell {
             .iter()
             .map(|&k| sharp(&state.cell, k))
             .collect::<Result<Vec<_>, _>>()?;
-        for _ in 0..CORRECTIONS {
-            if close(&reached) {
-                break;
+        if outcome != Outcome::Stalled {
+            // Per constraint, the last smoothed target and the sharp value it gave: after the
+            // first correction the next target is a secant step (with two constraints the
+            // bias changes as the shape does, and the plain shift oscillates; measured).
+            let mut last: Vec<Option<(f64, f64)>> = vec![None; kinds.len()];
+            for _ in 0..CORRECTIONS {
+                if close(&reached) {
+                    break;
+                }
+                for (i, r) in reached.iter().enumerate() {
+                    let slope = match last[i] {
+                        Some((t, v)) if (r - v).abs() > 0.0 => {
+                            ((walk.targets[i] - t) / (r - v)).clamp(0.5, 2.0)
+                        }
+                        _ => 1.0,
+                    };
+                    last[i] = Some((walk.targets[i], *r));
+                    walk.targets[i] += slope * (targets[i] - r);
+                }
+                outcome = walk.restore(&mut state, options.tolerance)?;
+                reached = kinds
+                    .iter()
+                    .map(|&k| sharp(&state.cell, k))
+                    .collect::<Result<Vec<_>, _>>()?;
+                if outcome != Outcome::Met {
+                    break;
+                }
             }
-            for (i, r) in reached.iter().enumerate() {
-                walk.targets[i] += targets[i] - r;
-            }
-            converged = walk.restore(&mut state, options.tolerance)?;
-            reached = kinds
-                .iter()
-                .map(|&k| sharp(&state.cell, k))
-                .collect::<Result<Vec<_>, _>>()?;
         }
-        converged &= close(&reached);
+        // Converged means what it says: the targets met, measured on the finer grid; how the
+        // restorations on the optimisation grid ended does not decide it.
+        let converged = close(&reached);
         let change = state.c.combine(1.0, &c0, -1.0).norm();
         let of = |kind: Kind| kinds.iter().position(|&k| k == kind).map(|i| reached[i]);
         let volume_reached = match of(Kind::Volume) {
@@ -435,6 +574,7 @@ impl FittedCell {
             state.cell,
             OptimizationReport {
                 converged,
+                stalled: !converged && outcome == Outcome::Stalled,
                 target: options.volume_fraction,
                 reached: volume_reached,
                 area_target: options.surface_area,
@@ -480,6 +620,8 @@ struct Walk<'p, 'a> {
     scales: &'p [f64],
     /// Steps left.
     budget: usize,
+    /// The trust radius of two-constraint steps ([`Walk::plane_step`]).
+    radius: f64,
     iterates: &'p mut Vec<Iterate>,
 }
 
@@ -536,41 +678,156 @@ impl Walk<'_, '_> {
             .all(|((v, t), s)| (v - t).abs() / s <= tolerance)
     }
 
-    /// Gauss–Newton steps on the constraints along the projected gradients,
-    /// `c + Σ λ_i g_i` with `J Jᵀ λ = r`, halved until the residual shrinks, until within
-    /// `tolerance`. Each step adds band-limited bumps at the current surface, so the surface
-    /// moves along its normal. False when the budget ran out or no step helped.
-    fn restore(&mut self, state: &mut State, tolerance: f64) -> Result<bool, FitError> {
+    /// Newton steps on the constraints, halved until the scaled residual shrinks, until within
+    /// `tolerance` (module docs: one constraint, Gauss–Newton along its projected gradient;
+    /// two, Newton in the plane of the gradients with a measured 2×2 Jacobian). Each step
+    /// adds band-limited bumps at the current surface, so the surface moves along its normal.
+    /// Stops with [`Outcome::Budget`] when the budget ran out, and [`Outcome::Stalled`] when
+    /// no step helps, the Jacobian is singular, or two steps together took less than
+    /// [`STALL_PROGRESS`] off the residual; a stall within [`SHARP_TOLERANCE_FACTOR`] times
+    /// `tolerance` counts as met (the sharp area's kinks on a coarse grid can hold the last
+    /// digits back; the final check is the finer grid's).
+    fn restore(&mut self, state: &mut State, tolerance: f64) -> Result<Outcome, FitError> {
+        let mut merits = vec![self.merit(state.values())];
+        let stalled = |walk: &Self, state: &State| {
+            if walk.within(state.values(), SHARP_TOLERANCE_FACTOR * tolerance) {
+                Outcome::Met
+            } else {
+                Outcome::Stalled
+            }
+        };
         while !self.within(state.values(), tolerance) {
             if self.budget == 0 {
-                return Ok(false);
+                return Ok(Outcome::Budget);
             }
             let Some(at) = &state.at else {
-                return Ok(false);
+                return Ok(Outcome::Stalled);
             };
             let g = self.problem.gradients(&at.samples)?;
-            let Some(lambda) = solve_gram(&g, &self.residuals(&at.values)) else {
-                return Ok(false);
+            let r = self.residuals(&at.values);
+            let next = if g.len() == 2 {
+                self.plane_step(state, &g, &r)?
+            } else {
+                self.line_search(state, g, &r)?
             };
-            let before = self.merit(&at.values);
-            let mut accepted = None;
-            let mut alpha = 1.0;
-            for _ in 0..=LINE_SEARCH_HALVINGS {
-                let trial = self.evaluate(step(&state.c, &g, &lambda, alpha))?;
-                if self.merit(trial.values()) < (1.0 - 0.25 * alpha) * before {
-                    accepted = Some(trial);
-                    break;
-                }
-                alpha *= 0.5;
-            }
-            let Some(next) = accepted else {
-                return Ok(false);
+            let Some(next) = next else {
+                return Ok(stalled(self, state));
             };
             *state = next;
             self.budget -= 1;
             self.record(state);
+            merits.push(self.merit(state.values()));
+            let k = merits.len();
+            if k >= 3
+                && merits[k - 1] > (1.0 - STALL_PROGRESS) * merits[k - 3]
+                && !self.within(state.values(), tolerance)
+            {
+                return Ok(stalled(self, state));
+            }
         }
-        Ok(true)
+        Ok(Outcome::Met)
+    }
+
+    /// One constraint (or more than two): the Gauss–Newton step `c + α Σ λ_i g_i` with
+    /// `J Jᵀ λ = r`, `α` halved until the scaled residual shrinks; `None` when `J Jᵀ` is
+    /// singular or no `α` helps.
+    fn line_search(
+        &self,
+        state: &State,
+        g: Vec<Vector>,
+        r: &[f64],
+    ) -> Result<Option<State>, FitError> {
+        let Some(lambda) = solve_gram(&g, r) else {
+            return Ok(None);
+        };
+        let before = self.merit(state.values());
+        let mut alpha = 1.0;
+        for _ in 0..=LINE_SEARCH_HALVINGS {
+            let trial = self.evaluate(step(&state.c, &g, &lambda, alpha))?;
+            if self.merit(trial.values()) < (1.0 - 0.25 * alpha) * before {
+                return Ok(Some(trial));
+            }
+            alpha *= 0.5;
+        }
+        Ok(None)
+    }
+
+    /// Two constraints: a trust-region step in the plane of the two projected gradients;
+    /// `None` when they are parallel or no radius down to [`PROBE`] helps.
+    ///
+    /// Why: the gradients are nearly parallel (cosines of 0.9 to 0.98 measured for an Oh
+    /// cell), so the step that moves one target and not the other is their small difference,
+    /// which the gradients' errors decide (tens of per cent for the volume's, which holds
+    /// `|∇Φ|` fixed), and along which the area is strongly convex (measured: its secant slope
+    /// changes sign within 0.05 of `‖c‖`). So the plane `u₁ ∥ g_V`, `u₂ ⟂ u₁` is kept, but the
+    /// 2×2 Jacobian `∂F_i/∂u_j` is measured by forward differences over the trust radius `Δ`
+    /// (secants at the scale of the step), the step minimises the scaled linear model within
+    /// `‖a‖ ≤ Δ` (Levenberg–Marquardt), and `Δ` doubles after a good step and halves after a
+    /// poor one. Each step re-linearises both constraints.
+    fn plane_step(
+        &mut self,
+        state: &State,
+        g: &[Vector],
+        r: &[f64],
+    ) -> Result<Option<State>, FitError> {
+        let unit = |v: &Vector| {
+            let n = v.norm();
+            (n.is_finite() && n > 0.0).then(|| v.combine(1.0 / n, &Vector::default(), 0.0))
+        };
+        // Smooth directions: the gradients in a Sobolev-like metric (module docs).
+        let smooth = [self.problem.smoothed(&g[0])?, self.problem.smoothed(&g[1])?];
+        let (vv, va) = (g[0].dot(&smooth[0]), g[0].dot(&smooth[1]));
+        if vv.is_nan() || vv <= 0.0 {
+            return Ok(None);
+        }
+        // The area's descent that keeps the volume to first order: `g_V · across = 0`.
+        let across = smooth[1].combine(1.0, &smooth[0], -va / vv);
+        if across.norm() <= PARALLEL * smooth[1].norm() {
+            return Ok(None);
+        }
+        let (Some(u1), Some(u2)) = (unit(&smooth[0]), unit(&across)) else {
+            return Ok(None);
+        };
+        let u = [u1, u2];
+        let scale = [self.scales[0], self.scales[1]];
+        let rs = [r[0] / scale[0], r[1] / scale[1]];
+        // The gradients' guess at the direction of each component (the probes' signs).
+        let predicted = [
+            [g[0].dot(&u[0]) / scale[0], g[0].dot(&u[1]) / scale[0]],
+            [g[1].dot(&u[0]) / scale[1], g[1].dot(&u[1]) / scale[1]],
+        ];
+        let guess = solve2(predicted, &rs).unwrap_or([1.0, 1.0]);
+        let base = state.values().to_vec();
+        let before = self.merit(&base);
+        while self.radius >= PROBE {
+            let radius = self.radius;
+            let mut m = [[0.0; 2]; 2];
+            for j in 0..2 {
+                let h = radius.copysign(guess[j]);
+                let probe = self.evaluate(state.c.combine(1.0, &u[j], h))?;
+                for i in 0..2 {
+                    m[i][j] = (probe.values()[i] - base[i]) / h / scale[i];
+                }
+            }
+            let a = trust_region_step(m, rs, radius);
+            let model = [
+                rs[0] - m[0][0] * a[0] - m[0][1] * a[1],
+                rs[1] - m[1][0] * a[0] - m[1][1] * a[1],
+            ];
+            let predicted_gain = before - model[0].hypot(model[1]);
+            let trial = self.evaluate(step(&state.c, &u, &a, 1.0))?;
+            let gain = before - self.merit(trial.values());
+            if predicted_gain > 0.0 && gain >= 0.1 * predicted_gain {
+                if gain >= 0.75 * predicted_gain && a[0].hypot(a[1]) >= 0.99 * radius {
+                    self.radius = (2.0 * radius).min(MAX_RADIUS);
+                }
+                return Ok(Some(trial));
+            }
+            self.radius = 0.5 * radius;
+        }
+        // Leave the next restoration a radius to start from.
+        self.radius = PROBE;
+        Ok(None)
     }
 
     /// From a point meeting the targets, steps towards the point of the linearised
@@ -630,6 +887,6 @@ impl Walk<'_, '_> {
         let met = self.restore(state, tolerance);
         self.iterates.truncate(len);
         self.budget = budget;
-        met
+        Ok(met? == Outcome::Met)
     }
 }
