@@ -136,9 +136,13 @@ impl WriteStage {
             .map(|f| Param::Str(f.name().to_string()))
             .collect();
         let stamp = &self.stamp;
+        // Only a 3MF carries the parameters: keyed without one, an edit that leaves the mesh
+        // as it was (another spelling of the cell, a renamed scaffold file) reruns no write.
+        let carried = self.formats.contains(&Format::ThreeMf);
         let parameters = stamp
             .parameters
             .iter()
+            .filter(|_| carried)
             .map(|(k, v)| Param::Str(format!("{k}={v}")))
             .collect();
         key.param("formats", Param::List(formats))
