@@ -41,19 +41,7 @@ fn mesh_area(cell: &FittedCell, samples: usize) -> f64 {
                 on(t[0]) && on(t[1]) && on(t[2]) && (v(t[0])[a] > 0.0) == (v(t[1])[a] > 0.0)
             })
         })
-        .map(|t| {
-            let (a, b, c) = (v(t[0]), v(t[1]), v(t[2]));
-            let (u, w) = (
-                [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
-                [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
-            );
-            let x = [
-                u[1] * w[2] - u[2] * w[1],
-                u[2] * w[0] - u[0] * w[2],
-                u[0] * w[1] - u[1] * w[0],
-            ];
-            0.5 * (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt()
-        })
+        .map(|t| triangle_area(v(t[0]), v(t[1]), v(t[2])))
         .sum()
 }
 

@@ -313,16 +313,7 @@ fn size_placed(
     if let Some(&size) = memo.get(&id) {
         return Ok(size);
     }
-    let object = objects.get(&id).ok_or_else(|| {
-        scanner.unexpected(at, "an object id defined in the resources", format!("{id}"))
-    })?;
-    if depth > MAX_DEPTH {
-        return Err(MeshReadError::Unsupported {
-            format: Format::ThreeMf,
-            at: Location::Line(scanner.line_of(at)),
-            what: format!("components nested over {MAX_DEPTH} deep (a cycle?)"),
-        });
-    }
+    let object = object_at(objects, id, depth, at, scanner)?;
     if !object.is_model {
         return Ok(0);
     }
@@ -335,16 +326,15 @@ fn size_placed(
     Ok(size)
 }
 
-/// Appends object `id` under `m` to `soup`.
-fn place(
-    objects: &HashMap<u32, Object>,
+/// Object `id`, met `depth` components deep at byte `at`: an error when it is not defined or
+/// the nesting is deeper than [`MAX_DEPTH`].
+fn object_at<'a>(
+    objects: &'a HashMap<u32, Object>,
     id: u32,
-    m: &Transform,
     depth: usize,
     at: usize,
     scanner: &Scanner,
-    soup: &mut TriangleSoup,
-) -> Result<(), MeshReadError> {
+) -> Result<&'a Object, MeshReadError> {
     let object = objects.get(&id).ok_or_else(|| {
         scanner.unexpected(at, "an object id defined in the resources", format!("{id}"))
     })?;
@@ -355,6 +345,20 @@ fn place(
             what: format!("components nested over {MAX_DEPTH} deep (a cycle?)"),
         });
     }
+    Ok(object)
+}
+
+/// Appends object `id` under `m` to `soup`.
+fn place(
+    objects: &HashMap<u32, Object>,
+    id: u32,
+    m: &Transform,
+    depth: usize,
+    at: usize,
+    scanner: &Scanner,
+    soup: &mut TriangleSoup,
+) -> Result<(), MeshReadError> {
+    let object = object_at(objects, id, depth, at, scanner)?;
     if !object.is_model {
         return Ok(());
     }
