@@ -16,35 +16,34 @@
 //!   and its value is a handle on that entry ([`Value::Chunked`]: the open file and its
 //!   verified trailer), which the write stage reads a chunk at a time. A chunk found corrupt
 //!   while a write reads it removes the entry and reruns the tile node, then the write.
-//! - Single-pass formats (STL) of a write node this build needs are written while the tiling
-//!   runs, from the same chunks, by a thread of their own ([`Prewritten`]); the write stage
-//!   only puts them in place, and only when its input is the mesh they were written from
-//!   (same hash). Unused ones are removed when the build ends: the sink's files stay whole or
-//!   absent.
+//! - Single-pass formats (STL) of a write node this build needs, and the pictures of its
+//!   preview nodes, are made while the tiling runs, from the same chunks ([`crate::early`]);
+//!   the write stage only puts such a file in place, the preview stage only adds the caption,
+//!   and only when their input is the mesh it was made from (same hash). Unused files are
+//!   removed when the build ends: the sink's files stay whole or absent.
 
 use std::collections::{HashMap, HashSet};
+use std::sync::Arc;
 use std::sync::mpsc;
-use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use rayon::prelude::*;
 
 use latticebuild_geom::mesh::MeshChunk;
-use latticebuild_geom::mesh_io::{Format, StlStream, Workers};
 
 use crate::cache::{
     Cache, CacheError, ContentHash, EntryReader, Key, KeyDescription, Lookup, Opened, SizeLimit,
     explain,
 };
+use crate::early::{self, Consumers, Made};
 use crate::graph::{Graph, NodeId};
 use crate::progress::Progress;
 use crate::stages::chunked::{ChunkedMesh, ChunkedWriter, is_chunked};
 use crate::stages::islands::{IslandsFailure, IslandsStage};
-use crate::stages::tile::TileOutput;
+use crate::stages::tile::{TileOutput, Tiled};
 use crate::stages::write::{MeshInput, WriteError};
 use crate::stages::{
-    MeshArtifact, OutputSink, PendingFile, Prewritten, Stage, StageError, WrittenFile,
-    WrittenOutput, warnings,
+    MeshArtifact, OutputSink, Stage, StageError, WrittenFile, WrittenOutput, warnings,
 };
 
 /// A tile stage's inputs: its cells' payloads, the scaffold file's bytes, the density table.
@@ -140,19 +139,6 @@ impl From<CacheError> for Failure {
 /// one being made and one being written, memory holds about three chunks.
 const CHUNKS_IN_FLIGHT: usize = 1;
 
-/// A thread writing write node `node`'s STL file from the chunks it is sent.
-struct Prewriter<'scope> {
-    node: NodeId,
-    send: mpsc::SyncSender<Arc<MeshChunk>>,
-    thread: std::thread::ScopedJoinHandle<'scope, Option<Box<dyn PendingFile>>>,
-}
-
-/// A write node's file written while its tiling ran, and the hash of the mesh it holds.
-struct WrittenEarly {
-    mesh: ContentHash,
-    file: Prewritten,
-}
-
 /// What the cache holds for a node this build needs.
 enum CacheStatus {
     /// Up to date: its output hash, and its value when the lookup already loaded it (a write
@@ -198,8 +184,8 @@ pub struct Builder<'a> {
     runs: HashMap<NodeId, NodeRun>,
     /// The nodes this build resolves.
     needed: HashSet<NodeId>,
-    /// Files written while a tiling ran, by write node, with the hash of the mesh they hold.
-    prewritten: Mutex<HashMap<NodeId, WrittenEarly>>,
+    /// Files written and pictures drawn while a tiling ran, by node.
+    early: early::Ready,
     /// Nodes that failed, or whose input did, with the error of the stage that failed.
     failed: HashMap<NodeId, String>,
     /// How many bytes of entries the cache may keep beyond this build's ([`Cache::gc`]).
@@ -221,7 +207,7 @@ impl<'a> Builder<'a> {
             resolved: HashMap::new(),
             runs: HashMap::new(),
             needed: HashSet::new(),
-            prewritten: Mutex::new(HashMap::new()),
+            early: early::Ready::default(),
             failed: HashMap::new(),
             cache_limit: SizeLimit::bytes(u64::MAX),
         }
@@ -753,7 +739,8 @@ impl<'a> Builder<'a> {
         let cache = self.cache;
         let progress = self.progress.start(name, 0);
         std::thread::scope(|scope| {
-            let prewriters = self.begin_prewrites(id, scope);
+            let needed = |node| self.needed.contains(&node);
+            let mut consumers = Consumers::begin(self.graph, needed, self.sink, id, scope);
             let (send, receive) = mpsc::sync_channel::<Arc<MeshChunk>>(CHUNKS_IN_FLIGHT);
             let writer = scope.spawn(move || -> Result<_, StageError> {
                 // Begun on the first chunk, so a 2D tiling makes no temporary file.
@@ -772,15 +759,17 @@ impl<'a> Builder<'a> {
                 }
                 Ok(writer)
             });
-            let output = stage.run(cells, file, table, &*progress, &mut |chunk| {
-                for prewriter in &prewriters {
-                    // A stopped prewriter only means its file is written again later.
-                    let _ = prewriter.send.send(Arc::clone(&chunk));
+            let output = stage.run(cells, file, table, &*progress, &mut |event| {
+                consumers.hand_on(&event, scope);
+                match event {
+                    Tiled::Chunk(chunk) => {
+                        send.send(chunk).map_err(|_| StageError::CacheWriterStopped)
+                    }
+                    Tiled::ScaffoldBox(_) => Ok(()),
                 }
-                send.send(chunk).map_err(|_| StageError::CacheWriterStopped)
             });
             drop(send);
-            let prewritten = self.finish_prewrites(prewriters);
+            let made = consumers.finish();
             let written = writer
                 .join()
                 .map_err(|_| StageError::Panicked("the cache writer"))?;
@@ -795,13 +784,7 @@ impl<'a> Builder<'a> {
                     match self.open_chunked(key)? {
                         Some(value) => {
                             if let Value::Chunked(mesh) = &value {
-                                let hash = mesh.source().hash();
-                                let mut ready = self.prewritten.lock().map_err(|_| {
-                                    StageError::Panicked("a thread writing files early")
-                                })?;
-                                for (node, file) in prewritten {
-                                    ready.insert(node, WrittenEarly { mesh: hash, file });
-                                }
+                                self.early.keep(mesh.source().hash(), made);
                             }
                             Ok(value)
                         }
@@ -865,75 +848,6 @@ impl<'a> Builder<'a> {
                 None => Err(StageError::EntryUnreadable.into()),
             }
         })
-    }
-
-    /// Starts a thread per single-pass file of the write nodes this build needs that read
-    /// tile node `tile`, each writing its file from the chunks it is sent. Encoded on the
-    /// thread itself ([`Workers::Caller`]): the rayon threads may all be blocked sending it
-    /// chunks. A file that cannot be begun is simply written later by the write stage.
-    fn begin_prewrites<'scope, 'env>(
-        &'env self,
-        tile: NodeId,
-        scope: &'scope std::thread::Scope<'scope, 'env>,
-    ) -> Vec<Prewriter<'scope>> {
-        let mut prewriters = Vec::new();
-        for (node, n) in self.graph.nodes.iter().enumerate() {
-            let Stage::Write(write) = &n.stage else {
-                continue;
-            };
-            if n.inputs.first() != Some(&tile) || !self.needed.contains(&node) {
-                continue;
-            }
-            if !write.formats.contains(&Format::Stl) {
-                continue;
-            }
-            let Ok(mut file) = self.sink.begin_file(&write.path(Format::Stl)) else {
-                continue;
-            };
-            let encoding = write.encoding;
-            let stamp = &write.stamp;
-            let (send, receive) = mpsc::sync_channel::<Arc<MeshChunk>>(CHUNKS_IN_FLIGHT);
-            let thread = scope.spawn(move || {
-                let mut stream =
-                    StlStream::begin(encoding, stamp, Workers::Caller, &mut file).ok()?;
-                for chunk in receive {
-                    stream.push(&chunk, &mut file).ok()?;
-                }
-                stream.finish(&mut file).ok()?;
-                Some(file)
-            });
-            prewriters.push(Prewriter { node, send, thread });
-        }
-        prewriters
-    }
-
-    /// The files the prewriters wrote whole, by write node (dropped ones are removed).
-    fn finish_prewrites(&self, prewriters: Vec<Prewriter>) -> Vec<(NodeId, Prewritten)> {
-        prewriters
-            .into_iter()
-            .filter_map(|Prewriter { node, send, thread }| {
-                drop(send);
-                let file = thread.join().ok().flatten()?;
-                Some((
-                    node,
-                    Prewritten {
-                        format: Format::Stl,
-                        file,
-                    },
-                ))
-            })
-            .collect()
-    }
-
-    /// The files written early for write node `id`, if they hold the mesh `input` hashes to.
-    fn take_prewritten(&self, id: NodeId, input: ContentHash) -> Vec<Prewritten> {
-        let Ok(mut ready) = self.prewritten.lock() else {
-            return Vec::new();
-        };
-        match ready.remove(&id) {
-            Some(early) if early.mesh == input => vec![early.file],
-            _ => Vec::new(),
-        }
     }
 
     /// Runs node `id`'s stage (keyed `key`) on its inputs' values, which must be loaded.
@@ -1032,7 +946,10 @@ impl<'a> Builder<'a> {
             },
             Stage::Preview(stage) => self.run_preview(id, stage),
             Stage::Write(stage) => {
-                let prewritten = self.take_prewritten(id, self.resolved[&node.inputs[0]].hash);
+                let prewritten = match self.early.take(id, self.resolved[&node.inputs[0]].hash) {
+                    Some(Made::File(file)) => vec![file],
+                    _ => Vec::new(),
+                };
                 let input = match input(0) {
                     Value::Mesh(mesh) => stage.run(MeshInput::Whole(&mesh), self.sink, prewritten),
                     Value::Chunked(mesh) => stage.run(
@@ -1080,10 +997,18 @@ impl<'a> Builder<'a> {
                 ));
             }
         }
+        let early = match self.early.take(id, self.resolved[&node.inputs[0]].hash) {
+            Some(Made::Picture(picture)) => Some(*picture),
+            _ => None,
+        };
         let drawn = match value(0) {
-            Some(Value::Mesh(mesh)) => {
-                stage.run(MeshInput::Whole(&mesh), &written, &cell_warnings, self.sink)
-            }
+            Some(Value::Mesh(mesh)) => stage.run(
+                MeshInput::Whole(&mesh),
+                &written,
+                &cell_warnings,
+                self.sink,
+                early,
+            ),
             Some(Value::Chunked(mesh)) => stage.run(
                 MeshInput::Chunked {
                     chunks: &*mesh,
@@ -1092,6 +1017,7 @@ impl<'a> Builder<'a> {
                 &written,
                 &cell_warnings,
                 self.sink,
+                early,
             ),
             _ => return Err(StageError::Internal("input is not a mesh".into()).into()),
         };

@@ -8,6 +8,7 @@ pub mod cli;
 pub mod commands;
 pub mod diagnostics;
 pub mod direct_file;
+pub mod early;
 pub mod files;
 pub mod graph;
 pub mod interrupt;

@@ -93,3 +93,44 @@ fn a_bad_preview_size_is_an_error_at_its_value() {
         "{err}"
     );
 }
+
+/// A 3D tiling's picture is drawn from its chunks while it tiles (nothing read back from the
+/// cache); drawn again from the cache entry — the PNG removed, or another format asked — it is
+/// the same bytes, since both are fitted to the scaffold's box, known before the first chunk.
+#[test]
+fn a_tiling_drawn_while_it_tiles_is_the_picture_drawn_from_its_entry() {
+    let p = Project::new(
+        r#"
+[cells.p]
+tpms = "p"
+symmetry = "Oh"
+fit = { n = 16 }
+
+[scaffolds.block]
+grid = { min = [0, 0, 0], max = [8, 6, 4], divisions = [4, 3, 2], element = "hex" }
+
+[outputs.a]
+scaffold = "block"
+cell = "p"
+offset = 0.3
+resolution = 10
+formats = ["stl"]
+"#,
+    );
+    let reports = p.build(&[]);
+    let bbox = &by_name(&reports, "a")["tiling"]["scaffold_bbox"];
+    assert_eq!(bbox.to_string(), "[[0.0,0.0,0.0],[8.0,6.0,4.0]]");
+    assert!(ran_all(&reports).contains(&"tile:a".to_string()));
+    let early = std::fs::read(p.out("a.png")).expect("png");
+    let (_, _, rgb) = decode(&p.out("a.png"));
+    let distinct: std::collections::BTreeSet<&[u8]> = rgb.chunks(3).collect();
+    assert!(distinct.len() > 20, "{} colours", distinct.len());
+
+    std::fs::remove_file(p.out("a.png")).expect("rm");
+    assert_eq!(ran_all(&p.build(&[])), ["preview:a"]);
+    assert_eq!(std::fs::read(p.out("a.png")).expect("png"), early);
+
+    let reports = p.build(&["--set", "outputs.a.formats=[\"stl\", \"ply\"]"]);
+    assert_eq!(ran_all(&reports), ["preview:a", "write:a"]);
+    assert_eq!(std::fs::read(p.out("a.png")).expect("png"), early);
+}

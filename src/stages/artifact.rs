@@ -220,6 +220,10 @@ pub struct TilingSummary {
     pub scaffold_volume: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub region_area: Option<f64>,
+    /// A 3D scaffold's box (of the nodes its elements use): known before the first triangle,
+    /// so the preview, fitted to it, can be drawn while the tiling runs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scaffold_bbox: Option<[[f64; 3]; 2]>,
 }
 
 /// What the SVG of a 2D region needs, and the area its fraction is over. A 2D cell carries its

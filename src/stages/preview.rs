@@ -3,7 +3,8 @@
 //! the output's box; a planar region seen from above).
 //!
 //! It reads the mesh (whole, or a tiling's chunks streamed from the cache entry: never whole
-//! in memory), the write stage's record (for the caption's triangle count, volume fraction
+//! in memory; or takes the picture drawn while the tiling ran, [`crate::early`], when it was
+//! drawn to the same spec), the write stage's record (for the caption's triangle count, volume fraction
 //! and warnings) and the payloads of the cell stages whose warnings the report repeats, so
 //! its key holds everything its picture shows. A change of formats reruns the write and this
 //! stage, nothing before them. Like the write stage it reaches its file only through the
@@ -20,8 +21,8 @@ use super::warnings;
 use super::write::{MeshInput, OutputSink, WriteError};
 use crate::cache::{KeyBuilder, Param};
 
-/// 1: the first.
-pub const VERSION: u32 = 1;
+/// 1: the first. 2: a caption band of one height; a 3D tiling fitted to its scaffold's box.
+pub const VERSION: u32 = 2;
 
 /// The default image size (`[build] preview_size`).
 pub const DEFAULT_SIZE: [u32; 2] = [1024, 768];
@@ -94,65 +95,54 @@ impl PreviewStage {
         lines
     }
 
-    /// What the picture is fitted to: the output's box (its own, found by an SDF program, or
-    /// the manifest's), else the mesh's bounding box; the section cuts its middle.
-    fn spec(&self, written: &WrittenOutput, caption: Vec<Line>) -> Spec {
+    /// What the picture is fitted to: a 3D tiling's scaffold box (known before its first
+    /// triangle, so the picture can be drawn while it tiles), the output's box (its own,
+    /// found by an SDF program, or the manifest's), else the mesh's bounding box; the section
+    /// cuts its middle.
+    fn spec(&self, written: &WrittenOutput) -> Spec {
+        if let Some(bbox) = written.tiling.as_ref().and_then(|t| t.scaffold_bbox) {
+            return self.tiling_spec(bbox);
+        }
         let s = &written.summary;
         let bbox = written
             .domain
             .or(self.domain)
             .filter(|_| written.tiling.is_none())
             .unwrap_or([s.bbox_min, s.bbox_max]);
+        self.fitted(bbox, written.planar_element_area.is_some())
+    }
+
+    /// The picture of a 3D tiling of a scaffold of box `bbox`.
+    pub fn tiling_spec(&self, bbox: [[f64; 3]; 2]) -> Spec {
+        self.fitted(bbox, false)
+    }
+
+    fn fitted(&self, bbox: [[f64; 3]; 2], planar: bool) -> Spec {
         let finite = bbox.iter().flatten().all(|c| c.is_finite());
         let bbox = if finite { bbox } else { [[0.0; 3], [1.0; 3]] };
-        let cut = match written.planar_element_area {
-            Some(_) => None,
-            None => Some((bbox[0][2] + bbox[1][2]) / 2.0),
-        };
         Spec {
             size: (self.size[0] as usize, self.size[1] as usize),
             bbox,
-            cut,
-            caption,
+            cut: (!planar).then_some((bbox[0][2] + bbox[1][2]) / 2.0),
         }
     }
 
-    /// Draws the mesh and writes the PNG through `sink`.
+    /// Draws the mesh and writes the PNG through `sink`. `early`: the mesh's picture drawn
+    /// while it was made ([`crate::early`]), used when drawn to this output's spec.
     pub fn run(
         &self,
         input: MeshInput,
         written: &WrittenOutput,
         cell_warnings: &[String],
         sink: &dyn OutputSink,
+        early: Option<Preview>,
     ) -> Result<WrittenFile, WriteError> {
-        let mut preview = Preview::new(self.spec(written, self.caption(written, cell_warnings)));
-        let bad = |i: usize| {
-            WriteError::Failed(StageError::Internal(format!(
-                "triangle {i} of the mesh has a corner out of range"
-            )))
+        let spec = self.spec(written);
+        let preview = match early {
+            Some(picture) if *picture.spec() == spec => picture,
+            _ => draw(spec, input)?,
         };
-        match input {
-            MeshInput::Whole(artifact) => preview.add_mesh(&artifact.mesh).map_err(bad)?,
-            MeshInput::Chunked { chunks, .. } => {
-                let mut failed = None;
-                let walk = chunks.for_each_chunk(Pass::Facets, &mut |chunk| {
-                    preview.add_chunk(chunk).map_err(|i| {
-                        failed = Some(i);
-                        std::io::Error::other("a corner out of range")
-                    })
-                });
-                if let Err(e) = walk {
-                    return Err(match failed {
-                        Some(i) => bad(i),
-                        None if is_corrupt(&e) => WriteError::CorruptInput(e.to_string()),
-                        None => WriteError::Failed(StageError::Internal(format!(
-                            "cannot read the mesh: {e}"
-                        ))),
-                    });
-                }
-            }
-        }
-        let image = preview.finish();
+        let image = preview.finish(&self.caption(written, cell_warnings));
         let path = self.path();
         let (bytes, modified_ns) = sink
             .write_file(&path, &mut |w| image.write_png(w))
@@ -169,6 +159,38 @@ impl PreviewStage {
             modified_ns,
         })
     }
+}
+
+/// The picture of `input` to `spec`, read from the cache entry a chunk at a time when chunked.
+fn draw(spec: Spec, input: MeshInput) -> Result<Preview, WriteError> {
+    let mut preview = Preview::new(spec);
+    let bad = |i: usize| {
+        WriteError::Failed(StageError::Internal(format!(
+            "triangle {i} of the mesh has a corner out of range"
+        )))
+    };
+    match input {
+        MeshInput::Whole(artifact) => preview.add_mesh(&artifact.mesh).map_err(bad)?,
+        MeshInput::Chunked { chunks, .. } => {
+            let mut failed = None;
+            let walk = chunks.for_each_chunk(Pass::Facets, &mut |chunk| {
+                preview.add_chunk(chunk).map_err(|i| {
+                    failed = Some(i);
+                    std::io::Error::other("a corner out of range")
+                })
+            });
+            if let Err(e) = walk {
+                return Err(match failed {
+                    Some(i) => bad(i),
+                    None if is_corrupt(&e) => WriteError::CorruptInput(e.to_string()),
+                    None => WriteError::Failed(StageError::Internal(format!(
+                        "cannot read the mesh: {e}"
+                    ))),
+                });
+            }
+        }
+    }
+    Ok(preview)
 }
 
 /// `1234567` as `1,234,567`.

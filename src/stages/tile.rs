@@ -67,7 +67,8 @@ use crate::progress::StageProgress;
 /// 6: sized solids (`wall`, `grow`, `volume_fraction`) and their summary in the head.
 /// 7: point-evaluated distances projected onto the surface (Newton): walls and growths
 /// moved, and entries made before that kept a version that no longer described them.
-pub const VERSION: u32 = 7;
+/// 8: a 3D tiling's head records its scaffold's box (`scaffold_bbox`).
+pub const VERSION: u32 = 8;
 
 /// Triangles per chunk asked of the producer, about. Chunk boundaries are in the payload's
 /// bytes, so in its hash: the chunk size is a function of the resolution (in the key) alone,
@@ -88,6 +89,14 @@ const NORMAL_TOLERANCE: f64 = 1e-9;
 pub enum TileOutput {
     Whole(MeshArtifact),
     Chunked(ChunkedHead),
+}
+
+/// What a 3D tiling hands on while it runs ([`TileStage::run`]): its scaffold's box once the
+/// scaffold is read, before anything else, then its chunks in order.
+pub enum Tiled {
+    /// The box of the nodes the elements use (also [`TilingSummary::scaffold_bbox`]).
+    ScaffoldBox([[f64; 3]; 2]),
+    Chunk(Arc<MeshChunk>),
 }
 
 /// Where the scaffold comes from.
@@ -339,14 +348,15 @@ impl TileStage {
     }
 
     /// Runs the stage on the cells' coefficient tables and, for a file, its bytes. A 3D
-    /// tiling's chunks go to `chunks`, in order, as they are made and checked.
+    /// tiling's scaffold box, then its chunks (in order, as they are made and checked) go to
+    /// `handed_on`.
     pub fn run(
         &self,
         cells: &[&[u8]],
         file: Option<&[u8]>,
         table: Option<&[u8]>,
         progress: &dyn StageProgress,
-        chunks: &mut (dyn FnMut(Arc<MeshChunk>) -> Result<(), StageError> + Send),
+        handed_on: &mut (dyn FnMut(Tiled) -> Result<(), StageError> + Send),
     ) -> Result<TileOutput, StageError> {
         progress.phase("reading the scaffold");
         let scaffold = self.scaffold(file)?;
@@ -407,6 +417,8 @@ impl TileStage {
                     })
                 });
         }
+        let scaffold_bbox = used_nodes_box(&scaffold);
+        handed_on(Tiled::ScaffoldBox(scaffold_bbox))?;
         // The check takes each chunk on the pool while the next one is tiled (see
         // `stream_scaffold`'s sink): its parallel parts share both threads with the tiling,
         // where a check thread of its own was the pipeline's slowest stage.
@@ -426,7 +438,7 @@ impl TileStage {
             &mut |chunk| {
                 let chunk = Arc::new(chunk);
                 // Handed on first, so the writers encode while this thread checks.
-                chunks(Arc::clone(&chunk)).map_err(|e| e.to_string())?;
+                handed_on(Tiled::Chunk(Arc::clone(&chunk))).map_err(|e| e.to_string())?;
                 // Both on the pool: the piece count is serial, the check parallel inside.
                 rayon::join(|| check.push(&chunk), || pieces.push(&chunk));
                 in_flight.push_back(chunk);
@@ -458,6 +470,7 @@ impl TileStage {
                 boundary_faces: stats.boundary_faces as u64,
                 scaffold_volume: scaffold.measure(),
                 region_area: None,
+                scaffold_bbox: Some(scaffold_bbox),
             }),
         }))
     }
@@ -581,6 +594,7 @@ impl TileStage {
                 boundary_faces: region.stats.boundary_faces as u64,
                 scaffold_volume,
                 region_area: Some(region.area),
+                scaffold_bbox: None,
             }),
         })
     }
@@ -766,6 +780,20 @@ impl TileStage {
             ))),
         }
     }
+}
+
+/// The box of the scaffold's nodes that its elements use (a file may hold others).
+fn used_nodes_box(scaffold: &Scaffold) -> [[f64; 3]; 2] {
+    let mut bbox = [[f64::INFINITY; 3], [f64::NEG_INFINITY; 3]];
+    for &node in &scaffold.connectivity {
+        if let Some(p) = scaffold.nodes.get(node as usize) {
+            for a in 0..3 {
+                bbox[0][a] = bbox[0][a].min(p[a]);
+                bbox[1][a] = bbox[1][a].max(p[a]);
+            }
+        }
+    }
+    bbox
 }
 
 /// The cells and solid a tiling is made of, once sized (see [`TileStage::sized`]).

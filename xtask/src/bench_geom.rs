@@ -592,11 +592,11 @@ fn preview() -> Result<(), String> {
         size: (1024, 768),
         bbox: [check.bbox_min, check.bbox_max],
         cut: Some((check.bbox_min[2] + check.bbox_max[2]) / 2.0),
-        caption: vec![Line {
-            text: format!("torus: {} triangles", mesh.triangles.len()),
-            warning: false,
-        }],
     };
+    let caption = [Line {
+        text: format!("torus: {} triangles", mesh.triangles.len()),
+        warning: false,
+    }];
     let mut best = f64::INFINITY;
     for _ in 0..3 {
         let start = Instant::now();
@@ -605,7 +605,7 @@ fn preview() -> Result<(), String> {
             .add_mesh(&mesh)
             .map_err(|i| format!("triangle {i} out of range"))?;
         let drawn = start.elapsed().as_secs_f64();
-        let image = preview.finish();
+        let image = preview.finish(&caption);
         let mut png = Vec::new();
         image.write_png(&mut png).map_err(|e| e.to_string())?;
         let seconds = start.elapsed().as_secs_f64();

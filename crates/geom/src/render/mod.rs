@@ -10,6 +10,9 @@
 //!   the same bytes for any thread count (see [`raster`] and [`section`]).
 //! - Triangles may be added in any number of calls (a tiling's chunks, streamed): the result
 //!   is that of adding them all at once, so a mesh is never needed whole in memory.
+//! - The caption is given last ([`Preview::finish`]) and its band has one height, room for a
+//!   title and [`MAX_WARNINGS`] warnings, whatever it holds: the panels can be drawn before
+//!   the caption is known (a tiling's, while it tiles) and come out the same.
 //! - PNG bytes come from the `png` crate at fixed settings: same pixels, same bytes.
 
 pub mod font;
@@ -41,6 +44,9 @@ const BATCH: usize = 1 << 18;
 /// Triangles one task takes in a row, so the thread pool's cost per task is small against it.
 const RUN: usize = 4096;
 
+/// A triangle's corners: model positions, and pixel positions with depths in the view.
+type Corners = ([[f32; 3]; 3], [[f32; 3]; 3]);
+
 /// One line of the caption.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Line {
@@ -58,8 +64,6 @@ pub struct Spec {
     /// `Some(z0)`: isometric view and the section at `z = z0`; `None`: a planar region, seen
     /// from above.
     pub cut: Option<f64>,
-    /// The caption: a title line, then warnings.
-    pub caption: Vec<Line>,
 }
 
 /// An RGB image, row by row.
@@ -82,30 +86,26 @@ pub struct Layout {
     pub section: Option<(usize, usize)>,
 }
 
-impl Spec {
-    /// The caption's lines as drawn: the title, then at most [`MAX_WARNINGS`] warnings (the
-    /// last saying how many more there were).
-    pub fn lines(&self) -> Vec<Line> {
-        let mut lines: Vec<Line> = self
-            .caption
-            .iter()
-            .take(1 + MAX_WARNINGS)
-            .cloned()
-            .collect();
-        let hidden = self.caption.len().saturating_sub(1 + MAX_WARNINGS);
-        if hidden > 0
-            && let Some(last) = lines.last_mut()
-        {
-            last.text = format!("(+{} more warnings) {}", hidden + 1, last.text);
-        }
-        lines
+/// A caption's lines as drawn: the title, then at most [`MAX_WARNINGS`] warnings (the last
+/// saying how many more there were).
+pub fn caption_lines(caption: &[Line]) -> Vec<Line> {
+    let mut lines: Vec<Line> = caption.iter().take(1 + MAX_WARNINGS).cloned().collect();
+    let hidden = caption.len().saturating_sub(1 + MAX_WARNINGS);
+    if hidden > 0
+        && let Some(last) = lines.last_mut()
+    {
+        last.text = format!("(+{} more warnings) {}", hidden + 1, last.text);
     }
+    lines
+}
 
+impl Spec {
     pub fn layout(&self) -> Layout {
         let (width, height) = self.size;
         let text_scale = if width >= 900 { 2 } else { 1 };
-        let lines = self.lines().len().max(1);
-        let band = lines * font::CELL.1 * text_scale + 8 * text_scale;
+        // Room for every line a caption may have, whatever this one holds: the panels are
+        // drawn before the caption is known (a tiling's, while it tiles).
+        let band = (1 + MAX_WARNINGS) * font::CELL.1 * text_scale + 8 * text_scale;
         let panel_height = height.saturating_sub(band).max(1);
         let (view, section) = match self.cut {
             Some(_) => ((0, width / 2), Some((width / 2, width - width / 2))),
@@ -155,18 +155,22 @@ impl Preview {
         self.layout
     }
 
+    pub fn spec(&self) -> &Spec {
+        &self.spec
+    }
+
     /// The view's camera (in its panel's pixels).
     pub fn camera(&self) -> Camera {
         self.view.camera
     }
 
-    /// Adds `count` triangles, triangle `i` with corners `corners(i)`; `Err(i)` when one cannot
-    /// be resolved. Each triangle's corners are looked up once, for both panels: runs of
+    /// Adds `count` triangles, triangle `i` with corners `corners(i)` (model positions, and
+    /// their [`Raster::screen`] positions); `Err(i)` when one cannot be resolved. Runs of
     /// triangles are projected and cut in parallel, then drawn and filled in triangle order.
-    pub fn add(
+    fn add(
         &mut self,
         count: usize,
-        corners: &(dyn Fn(usize) -> Option<[[f32; 3]; 3]> + Sync),
+        corners: &(dyn Fn(usize) -> Option<Corners> + Sync),
     ) -> Result<(), usize> {
         let mut start = 0;
         while start < count {
@@ -178,9 +182,9 @@ impl Preview {
                 .map(|first| {
                     let (mut flats, mut cuts) = (Vec::new(), Vec::new());
                     for i in first..(first + RUN).min(end) {
-                        let c = corners(i).ok_or(i)?;
-                        flats.extend(view.flatten(c));
-                        cuts.extend(section.and_then(|s| s.segment(c)));
+                        let (model, screen) = corners(i).ok_or(i)?;
+                        flats.extend(view.flatten(screen, model));
+                        cuts.extend(section.and_then(|s| s.segment(model)));
                     }
                     Ok((flats, cuts))
                 })
@@ -197,15 +201,27 @@ impl Preview {
         Ok(())
     }
 
+    /// The view's pixel positions of `positions`: each vertex projected once, however many
+    /// triangles share it.
+    fn project(&self, positions: &[[f32; 3]]) -> Vec<[f32; 3]> {
+        positions
+            .par_iter()
+            .with_min_len(RUN)
+            .map(|&p| self.view.screen(p))
+            .collect()
+    }
+
     /// Adds a whole mesh.
     pub fn add_mesh(&mut self, mesh: &Mesh) -> Result<(), usize> {
+        let screen = self.project(&mesh.vertices);
         let corners = |i: usize| {
             let t = mesh.triangles.get(i)?;
-            let mut c = [[0.0f32; 3]; 3];
+            let (mut model, mut pixels) = ([[0.0f32; 3]; 3], [[0.0f32; 3]; 3]);
             for k in 0..3 {
-                c[k] = *mesh.vertices.get(t[k] as usize)?;
+                model[k] = *mesh.vertices.get(t[k] as usize)?;
+                pixels[k] = screen[t[k] as usize];
             }
-            Some(c)
+            Some((model, pixels))
         };
         self.add(mesh.triangles.len(), &corners)
     }
@@ -213,19 +229,33 @@ impl Preview {
     /// Adds a chunk's triangles (corners resolved through the chunk's own and borrowed
     /// vertices).
     pub fn add_chunk(&mut self, chunk: &MeshChunk) -> Result<(), usize> {
+        let screen = self.project(&chunk.vertices);
+        let borrowed: Vec<[f32; 3]> = chunk
+            .borrowed
+            .iter()
+            .map(|b| self.view.screen(b.1))
+            .collect();
+        let vertex = |id: u32| {
+            if id >= chunk.first_vertex {
+                let k = (id - chunk.first_vertex) as usize;
+                return Some((*chunk.vertices.get(k)?, screen[k]));
+            }
+            let k = chunk.borrowed.binary_search_by_key(&id, |&(i, _)| i).ok()?;
+            Some((chunk.borrowed[k].1, borrowed[k]))
+        };
         let corners = |i: usize| {
             let t = chunk.triangles.get(i)?;
-            let mut c = [[0.0f32; 3]; 3];
+            let (mut model, mut pixels) = ([[0.0f32; 3]; 3], [[0.0f32; 3]; 3]);
             for k in 0..3 {
-                c[k] = chunk.position(t[k])?;
+                (model[k], pixels[k]) = vertex(t[k])?;
             }
-            Some(c)
+            Some((model, pixels))
         };
         self.add(chunk.triangles.len(), &corners)
     }
 
-    /// The finished image.
-    pub fn finish(mut self) -> Image {
+    /// The finished image, with `caption` (a title line, then warnings) below the panels.
+    pub fn finish(mut self, caption: &[Line]) -> Image {
         let (width, height) = self.spec.size;
         let layout = self.layout;
         let mut image = Image {
@@ -267,7 +297,7 @@ impl Preview {
                 image.set(x, y, CAPTION_BACKGROUND);
             }
         }
-        for (k, line) in self.spec.lines().iter().enumerate() {
+        for (k, line) in caption_lines(caption).iter().enumerate() {
             let y = h + 4 * s + k * font::CELL.1 * s;
             let colour = if line.warning { WARNING } else { TITLE };
             image.text(6 * s, y, &line.text, s, colour, width);

@@ -239,11 +239,16 @@ impl Raster {
         base.map(|c| (255.0 * (c * light).clamp(0.0, 1.0)).round() as u8)
     }
 
-    /// Projects one triangle; `None` when it covers no pixel centre. Most triangles of a big
-    /// mesh are smaller than a pixel and cover none, so that is decided before the shading.
-    pub fn flatten(&self, corners: [[f32; 3]; 3]) -> Option<Flat> {
-        let p = corners.map(|c| c.map(f64::from));
-        let s = p.map(|c| self.camera.project(c).map(|v| v as f32));
+    /// The pixel position and depth of model point `p`, in `f32`: a vertex is projected once
+    /// and every triangle using it gets the same bits.
+    pub fn screen(&self, p: [f32; 3]) -> [f32; 3] {
+        self.camera.project(p.map(f64::from)).map(|v| v as f32)
+    }
+
+    /// A triangle of model corners `corners` and their [`Raster::screen`] positions `s`;
+    /// `None` when it covers no pixel centre. Most triangles of a big mesh are smaller than a
+    /// pixel and cover none, so that is decided before the shading.
+    pub fn flatten(&self, s: [[f32; 3]; 3], corners: [[f32; 3]; 3]) -> Option<Flat> {
         let (mut lo, mut hi) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
         for c in &s {
             for k in 0..2 {
@@ -253,6 +258,7 @@ impl Raster {
         }
         let cols = centres(lo[0], hi[0], self.width)?;
         let rows = centres(lo[1], hi[1], self.height)?;
+        let p = corners.map(|c| c.map(f64::from));
         let n = cross(sub(p[1], p[0]), sub(p[2], p[0]));
         Some(Flat {
             x: s.map(|c| c[0]),

@@ -33,18 +33,21 @@ fn spec(bbox: [[f64; 3]; 2], cut: Option<f64>) -> Spec {
         size: (1024, 768),
         bbox,
         cut,
-        caption: vec![Line {
-            text: "unit".into(),
-            warning: false,
-        }],
     }
+}
+
+fn caption() -> Vec<Line> {
+    vec![Line {
+        text: "unit".into(),
+        warning: false,
+    }]
 }
 
 fn render(mesh: &Mesh, spec: Spec) -> (Image, Camera, Layout) {
     let mut preview = Preview::new(spec);
     preview.add_mesh(mesh).unwrap();
     let (camera, layout) = (preview.camera(), preview.layout());
-    (preview.finish(), camera, layout)
+    (preview.finish(&caption()), camera, layout)
 }
 
 /// Pixels of the view panel (not background) and, of them, the red-tinted ones.
@@ -106,7 +109,7 @@ fn the_middle_section_of_a_sphere_is_a_disk_of_its_radius() {
     let mut preview = Preview::new(spec([[-r; 3], [r; 3]], Some(0.0)));
     preview.add_mesh(&mesh).unwrap();
     let layout = preview.layout();
-    let image = preview.finish();
+    let image = preview.finish(&caption());
     let (x0, w) = layout.section.unwrap();
     let cut = (0..layout.panel_height)
         .flat_map(|y| (x0..x0 + w).map(move |x| (x, y)))
@@ -142,7 +145,7 @@ fn a_section_has_its_pores_empty() {
     let mut preview = Preview::new(spec([[-2.0; 3], [2.0; 3]], Some(0.0)));
     preview.add_mesh(&mesh).unwrap();
     let layout = preview.layout();
-    let image = preview.finish();
+    let image = preview.finish(&caption());
     let (x0, w) = layout.section.unwrap();
     let cut = (0..layout.panel_height)
         .flat_map(|y| (x0..x0 + w).map(move |x| (x, y)))
@@ -162,8 +165,8 @@ fn a_section_has_its_pores_empty() {
 #[test]
 fn the_caption_draws_every_glyph_pixel_of_its_text() {
     let text = "gyroid: 123 triangles, volume fraction 0.3012";
-    let mut s = spec([[0.0; 3], [1.0; 3]], Some(0.5));
-    s.caption = vec![
+    let s = spec([[0.0; 3], [1.0; 3]], Some(0.5));
+    let lines = vec![
         Line {
             text: text.into(),
             warning: false,
@@ -174,7 +177,9 @@ fn the_caption_draws_every_glyph_pixel_of_its_text() {
         },
     ];
     let layout = s.layout();
-    let image = render(&cube(), s).0;
+    let mut preview = Preview::new(s);
+    preview.add_mesh(&cube()).unwrap();
+    let image = preview.finish(&lines);
     let count = |c: Rgb| {
         (layout.panel_height..image.height)
             .flat_map(|y| (0..image.width).map(move |x| (x, y)))
@@ -214,7 +219,7 @@ fn the_image_is_the_same_for_any_thread_count_and_chunking() {
     for chunk in MeshChunk::split(&mesh, 700) {
         chunked.add_chunk(&chunk).unwrap();
     }
-    assert_eq!(chunked.finish(), one);
+    assert_eq!(chunked.finish(&caption()), one);
 }
 
 #[test]
