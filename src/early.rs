@@ -26,6 +26,7 @@ use latticebuild_geom::render::{Preview, Spec};
 use crate::cache::ContentHash;
 use crate::graph::{Graph, NodeId};
 use crate::stages::Stage;
+use crate::stages::preview::PreviewStage;
 use crate::stages::tile::Tiled;
 use crate::stages::write::{OutputSink, Prewritten};
 
@@ -44,11 +45,8 @@ pub enum Made {
 /// The consumers of one tiling while it runs.
 pub struct Consumers<'scope> {
     running: Vec<(NodeId, Consumer<'scope>)>,
-    /// Preview nodes waiting for the scaffold's box, with their picture's spec for a box.
-    to_draw: Vec<(
-        NodeId,
-        Box<dyn Fn([[f64; 3]; 2]) -> Spec + Send + Sync + 'scope>,
-    )>,
+    /// Preview nodes waiting for the scaffold's box, whose picture they are fitted to.
+    to_draw: Vec<(NodeId, PreviewStage)>,
 }
 
 struct Consumer<'scope> {
@@ -99,11 +97,7 @@ impl<'scope> Consumers<'scope> {
                     });
                     consumers.running.push((node, consumer));
                 }
-                Stage::Preview(preview) => {
-                    let preview = preview.clone();
-                    let spec = move |bbox| preview.tiling_spec(bbox);
-                    consumers.to_draw.push((node, Box::new(spec)));
-                }
+                Stage::Preview(preview) => consumers.to_draw.push((node, preview.clone())),
                 _ => {}
             }
         }
@@ -114,8 +108,8 @@ impl<'scope> Consumers<'scope> {
     pub fn hand_on(&mut self, event: &Tiled, scope: &'scope Scope<'scope, '_>) {
         match event {
             Tiled::ScaffoldBox(bbox) => {
-                for (node, spec) in self.to_draw.drain(..) {
-                    let spec = spec(*bbox);
+                for (node, preview) in self.to_draw.drain(..) {
+                    let spec = preview.tiling_spec(*bbox);
                     let consumer = Consumer::spawn(scope, move |receive| draw(spec, receive));
                     self.running.push((node, consumer));
                 }

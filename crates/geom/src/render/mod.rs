@@ -44,8 +44,35 @@ const BATCH: usize = 1 << 18;
 /// Triangles one task takes in a row, so the thread pool's cost per task is small against it.
 const RUN: usize = 4096;
 
-/// A triangle's corners: model positions, and pixel positions with depths in the view.
-type Corners = ([[f32; 3]; 3], [[f32; 3]; 3]);
+/// The vertices triangles are added with: ids from `first` index `model` (a chunk's own),
+/// smaller ones `borrowed` (sorted by id). Each is kept projected as the view's pixel
+/// position and depth ([`Raster::screen`]) with its model `z` (for the section's plane test),
+/// so most triangles need one small record per corner.
+struct Vertices<'a> {
+    first: u32,
+    model: &'a [[f32; 3]],
+    projected: Vec<[f32; 4]>,
+    borrowed: &'a [(u32, [f32; 3])],
+    borrowed_projected: Vec<[f32; 4]>,
+}
+
+impl Vertices<'_> {
+    fn projected(&self, id: u32) -> Option<[f32; 4]> {
+        if id >= self.first {
+            return self.projected.get((id - self.first) as usize).copied();
+        }
+        let k = self.borrowed.binary_search_by_key(&id, |b| b.0).ok()?;
+        Some(self.borrowed_projected[k])
+    }
+
+    fn model(&self, id: u32) -> Option<[f32; 3]> {
+        if id >= self.first {
+            return self.model.get((id - self.first) as usize).copied();
+        }
+        let k = self.borrowed.binary_search_by_key(&id, |b| b.0).ok()?;
+        Some(self.borrowed[k].1)
+    }
+}
 
 /// One line of the caption.
 #[derive(Clone, Debug, PartialEq)]
@@ -164,27 +191,39 @@ impl Preview {
         self.view.camera
     }
 
-    /// Adds `count` triangles, triangle `i` with corners `corners(i)` (model positions, and
-    /// their [`Raster::screen`] positions); `Err(i)` when one cannot be resolved. Runs of
-    /// triangles are projected and cut in parallel, then drawn and filled in triangle order.
-    fn add(
-        &mut self,
-        count: usize,
-        corners: &(dyn Fn(usize) -> Option<Corners> + Sync),
-    ) -> Result<(), usize> {
+    /// Adds `triangles`, their corners found in `vertices`; `Err(i)` when triangle `i` has
+    /// one that is not there. Runs of triangles are projected and cut in parallel, then drawn
+    /// and filled in triangle order. A corner's model position is looked up only for the
+    /// few triangles that cover a pixel centre or meet the section's plane.
+    fn add(&mut self, triangles: &[[u32; 3]], vertices: &Vertices) -> Result<(), usize> {
         let mut start = 0;
-        while start < count {
-            let end = (start + BATCH).min(count);
+        while start < triangles.len() {
+            let end = (start + BATCH).min(triangles.len());
             let (view, section) = (&self.view, self.section.as_ref());
             let firsts: Vec<usize> = (start..end).step_by(RUN).collect();
             let runs = firsts
                 .into_par_iter()
                 .map(|first| {
                     let (mut flats, mut cuts) = (Vec::new(), Vec::new());
-                    for i in first..(first + RUN).min(end) {
-                        let (model, screen) = corners(i).ok_or(i)?;
-                        flats.extend(view.flatten(screen, model));
-                        cuts.extend(section.and_then(|s| s.segment(model)));
+                    let last = (first + RUN).min(end);
+                    for (i, t) in (first..last).zip(&triangles[first..last]) {
+                        let [a, b, c] = [0, 1, 2].map(|k| vertices.projected(t[k]));
+                        let (Some(a), Some(b), Some(c)) = (a, b, c) else {
+                            return Err(i);
+                        };
+                        let model = || {
+                            let [a, b, c] = t.map(|id| vertices.model(id));
+                            Some([a?, b?, c?])
+                        };
+                        let screen = [a, b, c].map(|p| [p[0], p[1], p[2]]);
+                        if let Some(cover) = view.covers(screen) {
+                            flats.push(view.flatten(screen, cover, model().ok_or(i)?));
+                        }
+                        if let Some(s) = section
+                            && s.meets([a[3], b[3], c[3]])
+                        {
+                            cuts.extend(s.segment(model().ok_or(i)?));
+                        }
                     }
                     Ok((flats, cuts))
                 })
@@ -201,57 +240,45 @@ impl Preview {
         Ok(())
     }
 
-    /// The view's pixel positions of `positions`: each vertex projected once, however many
-    /// triangles share it.
-    fn project(&self, positions: &[[f32; 3]]) -> Vec<[f32; 3]> {
+    /// Each of `positions` as [`Vertices`] keeps it: projected once, however many triangles
+    /// share it.
+    fn project(&self, positions: &[[f32; 3]]) -> Vec<[f32; 4]> {
+        let view = &self.view;
         positions
             .par_iter()
             .with_min_len(RUN)
-            .map(|&p| self.view.screen(p))
+            .map(|&p| {
+                let s = view.screen(p);
+                [s[0], s[1], s[2], p[2]]
+            })
             .collect()
     }
 
     /// Adds a whole mesh.
     pub fn add_mesh(&mut self, mesh: &Mesh) -> Result<(), usize> {
-        let screen = self.project(&mesh.vertices);
-        let corners = |i: usize| {
-            let t = mesh.triangles.get(i)?;
-            let (mut model, mut pixels) = ([[0.0f32; 3]; 3], [[0.0f32; 3]; 3]);
-            for k in 0..3 {
-                model[k] = *mesh.vertices.get(t[k] as usize)?;
-                pixels[k] = screen[t[k] as usize];
-            }
-            Some((model, pixels))
+        let vertices = Vertices {
+            first: 0,
+            model: &mesh.vertices,
+            projected: self.project(&mesh.vertices),
+            borrowed: &[],
+            borrowed_projected: Vec::new(),
         };
-        self.add(mesh.triangles.len(), &corners)
+        self.add(&mesh.triangles, &vertices)
     }
 
     /// Adds a chunk's triangles (corners resolved through the chunk's own and borrowed
     /// vertices).
     pub fn add_chunk(&mut self, chunk: &MeshChunk) -> Result<(), usize> {
-        let screen = self.project(&chunk.vertices);
-        let borrowed: Vec<[f32; 3]> = chunk
-            .borrowed
-            .iter()
-            .map(|b| self.view.screen(b.1))
-            .collect();
-        let vertex = |id: u32| {
-            if id >= chunk.first_vertex {
-                let k = (id - chunk.first_vertex) as usize;
-                return Some((*chunk.vertices.get(k)?, screen[k]));
-            }
-            let k = chunk.borrowed.binary_search_by_key(&id, |&(i, _)| i).ok()?;
-            Some((chunk.borrowed[k].1, borrowed[k]))
+        let own = self.project(&chunk.vertices);
+        let borrowed: Vec<[f32; 3]> = chunk.borrowed.iter().map(|b| b.1).collect();
+        let vertices = Vertices {
+            first: chunk.first_vertex,
+            model: &chunk.vertices,
+            projected: own,
+            borrowed: &chunk.borrowed,
+            borrowed_projected: self.project(&borrowed),
         };
-        let corners = |i: usize| {
-            let t = chunk.triangles.get(i)?;
-            let (mut model, mut pixels) = ([[0.0f32; 3]; 3], [[0.0f32; 3]; 3]);
-            for k in 0..3 {
-                (model[k], pixels[k]) = vertex(t[k])?;
-            }
-            Some((model, pixels))
-        };
-        self.add(chunk.triangles.len(), &corners)
+        self.add(&chunk.triangles, &vertices)
     }
 
     /// The finished image, with `caption` (a title line, then warnings) below the panels.

@@ -2,7 +2,8 @@
 //!
 //! Invariants:
 //! - Deterministic for any thread count: triangles come in batches, in order, each projected
-//!   by a pure function ([`Raster::flatten`], run in parallel by the caller); a batch is binned
+//!   by pure functions ([`Raster::covers`], [`Raster::flatten`], run in parallel by the
+//!   caller); a batch is binned
 //!   to tiles in triangle order, and each tile draws its triangles in that order, keeping a
 //!   fragment only when it is strictly nearer (the first triangle wins a tie). So a pixel's
 //!   colour depends only on the sequence of triangles, never on which thread drew which tile.
@@ -245,10 +246,11 @@ impl Raster {
         self.camera.project(p.map(f64::from)).map(|v| v as f32)
     }
 
-    /// A triangle of model corners `corners` and their [`Raster::screen`] positions `s`;
-    /// `None` when it covers no pixel centre. Most triangles of a big mesh are smaller than a
-    /// pixel and cover none, so that is decided before the shading.
-    pub fn flatten(&self, s: [[f32; 3]; 3], corners: [[f32; 3]; 3]) -> Option<Flat> {
+    /// The pixel columns and rows whose centres the bounding box of a triangle of screen
+    /// positions `s` holds; `None` when it covers no pixel centre. Most triangles of a big
+    /// mesh are smaller than a pixel and cover none, so that is decided first, from the
+    /// projected corners alone.
+    pub fn covers(&self, s: [[f32; 3]; 3]) -> Option<((u32, u32), (u32, u32))> {
         let (mut lo, mut hi) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
         for c in &s {
             for k in 0..2 {
@@ -256,18 +258,30 @@ impl Raster {
                 hi[k] = hi[k].max(c[k]);
             }
         }
-        let cols = centres(lo[0], hi[0], self.width)?;
-        let rows = centres(lo[1], hi[1], self.height)?;
+        Some((
+            centres(lo[0], hi[0], self.width)?,
+            centres(lo[1], hi[1], self.height)?,
+        ))
+    }
+
+    /// A triangle ready to draw: screen positions `s` covering `(cols, rows)`
+    /// ([`Raster::covers`]), shaded by the normal of its model corners `corners`.
+    pub fn flatten(
+        &self,
+        s: [[f32; 3]; 3],
+        (cols, rows): ((u32, u32), (u32, u32)),
+        corners: [[f32; 3]; 3],
+    ) -> Flat {
         let p = corners.map(|c| c.map(f64::from));
         let n = cross(sub(p[1], p[0]), sub(p[2], p[0]));
-        Some(Flat {
+        Flat {
             x: s.map(|c| c[0]),
             y: s.map(|c| c[1]),
             z: s.map(|c| c[2]),
             rgb: self.shade(n),
             cols,
             rows,
-        })
+        }
     }
 
     /// Bins a batch of projected triangles to the tiles, in order, and draws every tile.

@@ -54,6 +54,13 @@ impl Section {
         }
     }
 
+    /// Whether the plane meets a triangle of corner heights `z` (as [`Section::segment`]
+    /// decides), so that only those triangles need their corners looked up.
+    pub fn meets(&self, z: [f32; 3]) -> bool {
+        let ups = z.iter().filter(|&&z| f64::from(z) >= self.z0).count();
+        ups == 1 || ups == 2
+    }
+
     /// The cut segment of one triangle, in pixels: `None` when the plane misses it.
     pub fn segment(&self, c: [[f32; 3]; 3]) -> Option<Segment> {
         let p = c.map(|v| v.map(f64::from));
