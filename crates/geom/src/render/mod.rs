@@ -45,33 +45,53 @@ const BATCH: usize = 1 << 18;
 const RUN: usize = 4096;
 
 /// The vertices triangles are added with: ids from `first` index `model` (a chunk's own),
-/// smaller ones `borrowed` (sorted by id). Each is kept projected as the view's pixel
-/// position and depth ([`Raster::screen`]) with its model `z` (for the section's plane test),
-/// so most triangles need one small record per corner.
+/// smaller ones `borrowed` (sorted by id). Each is kept projected as the view's pixel position
+/// and depth ([`Raster::screen`]) with its model `z` (for the section's plane test), and as a
+/// [`pass_key`]: slots `0..borrowed.len()` are the borrowed vertices', then the own ones'.
 struct Vertices<'a> {
     first: u32,
     model: &'a [[f32; 3]],
-    projected: Vec<[f32; 4]>,
     borrowed: &'a [(u32, [f32; 3])],
-    borrowed_projected: Vec<[f32; 4]>,
+    projected: Vec<[f32; 4]>,
+    keys: Vec<u64>,
 }
 
 impl Vertices<'_> {
-    fn projected(&self, id: u32) -> Option<[f32; 4]> {
+    fn slot(&self, id: u32) -> Option<usize> {
         if id >= self.first {
-            return self.projected.get((id - self.first) as usize).copied();
+            let slot = self.borrowed.len() + (id - self.first) as usize;
+            return (slot < self.keys.len()).then_some(slot);
         }
-        let k = self.borrowed.binary_search_by_key(&id, |b| b.0).ok()?;
-        Some(self.borrowed_projected[k])
+        self.borrowed.binary_search_by_key(&id, |b| b.0).ok()
     }
 
-    fn model(&self, id: u32) -> Option<[f32; 3]> {
-        if id >= self.first {
-            return self.model.get((id - self.first) as usize).copied();
+    fn model(&self, slot: usize) -> [f32; 3] {
+        match slot.checked_sub(self.borrowed.len()) {
+            Some(own) => self.model[own],
+            None => self.borrowed[slot].1,
         }
-        let k = self.borrowed.binary_search_by_key(&id, |b| b.0).ok()?;
-        Some(self.borrowed[k].1)
     }
+}
+
+/// A number per vertex such that a triangle whose corners' numbers agree on the view's cells
+/// across or down ([`Raster::cells`]) and on the side of the section's plane neither covers a
+/// pixel centre nor meets the plane, so it is passed over without looking further (most
+/// triangles of a tiling of tens of millions, which are smaller than a pixel). Bits 0–29
+/// hold the cell across, bit 30 is set when there is none; bits 31–60 and 61 the same down;
+/// bit 62 is the side of the plane. Cells are below 2³⁰ (no image is that wide).
+fn pass_key([across, down]: [Option<u32>; 2], above: bool) -> u64 {
+    let axis = |cell: Option<u32>| cell.map_or(1 << 30, |c| u64::from(c) & ((1 << 30) - 1));
+    axis(across) | axis(down) << 31 | u64::from(above) << 62
+}
+
+/// Whether a triangle of corners with these [`pass_key`]s may be passed over.
+fn passed_over([a, b, c]: [u64; 3]) -> bool {
+    const ACROSS: u64 = (1 << 31) - 1;
+    const DOWN: u64 = ACROSS << 31;
+    const NO_CELL: u64 = 1 << 30 | 1 << 61;
+    let differ = (a ^ b) | (a ^ c);
+    let shared = |axis: u64| differ & axis == 0 && a & axis & NO_CELL == 0;
+    (shared(ACROSS) || shared(DOWN)) && differ & 1 << 62 == 0
 }
 
 /// One line of the caption.
@@ -193,8 +213,9 @@ impl Preview {
 
     /// Adds `triangles`, their corners found in `vertices`; `Err(i)` when triangle `i` has
     /// one that is not there. Runs of triangles are projected and cut in parallel, then drawn
-    /// and filled in triangle order. A corner's model position is looked up only for the
-    /// few triangles that cover a pixel centre or meet the section's plane.
+    /// and filled in triangle order. Only triangles whose corners' [`pass_key`]s differ are
+    /// looked at further, and a corner's model position is looked up only for the few that
+    /// cover a pixel centre or meet the section's plane.
     fn add(&mut self, triangles: &[[u32; 3]], vertices: &Vertices) -> Result<(), usize> {
         let mut start = 0;
         while start < triangles.len() {
@@ -207,22 +228,23 @@ impl Preview {
                     let (mut flats, mut cuts) = (Vec::new(), Vec::new());
                     let last = (first + RUN).min(end);
                     for (i, t) in (first..last).zip(&triangles[first..last]) {
-                        let [a, b, c] = [0, 1, 2].map(|k| vertices.projected(t[k]));
+                        let [a, b, c] = t.map(|id| vertices.slot(id));
                         let (Some(a), Some(b), Some(c)) = (a, b, c) else {
                             return Err(i);
                         };
-                        let model = || {
-                            let [a, b, c] = t.map(|id| vertices.model(id));
-                            Some([a?, b?, c?])
-                        };
-                        let screen = [a, b, c].map(|p| [p[0], p[1], p[2]]);
+                        if passed_over([a, b, c].map(|k| vertices.keys[k])) {
+                            continue;
+                        }
+                        let [pa, pb, pc] = [a, b, c].map(|k| vertices.projected[k]);
+                        let model = || [a, b, c].map(|k| vertices.model(k));
+                        let screen = [pa, pb, pc].map(|p| [p[0], p[1], p[2]]);
                         if let Some(cover) = view.covers(screen) {
-                            flats.push(view.flatten(screen, cover, model().ok_or(i)?));
+                            flats.push(view.flatten(screen, cover, model()));
                         }
                         if let Some(s) = section
-                            && s.meets([a[3], b[3], c[3]])
+                            && s.meets([pa[3], pb[3], pc[3]])
                         {
-                            cuts.extend(s.segment(model().ok_or(i)?));
+                            cuts.extend(s.segment(model()));
                         }
                     }
                     Ok((flats, cuts))
@@ -240,44 +262,45 @@ impl Preview {
         Ok(())
     }
 
-    /// Each of `positions` as [`Vertices`] keeps it: projected once, however many triangles
-    /// share it.
-    fn project(&self, positions: &[[f32; 3]]) -> Vec<[f32; 4]> {
-        let view = &self.view;
-        positions
+    /// `borrowed` then `own` positions as [`Vertices`] keeps them: projected once, however
+    /// many triangles share them.
+    fn vertices<'a>(
+        &self,
+        first: u32,
+        own: &'a [[f32; 3]],
+        borrowed: &'a [(u32, [f32; 3])],
+    ) -> Vertices<'a> {
+        let (view, section) = (&self.view, self.section.as_ref());
+        let (projected, keys) = borrowed
             .par_iter()
+            .map(|b| b.1)
+            .chain(own.par_iter().copied())
             .with_min_len(RUN)
-            .map(|&p| {
+            .map(|p| {
                 let s = view.screen(p);
-                [s[0], s[1], s[2], p[2]]
+                let above = section.is_some_and(|c| c.above(p[2]));
+                ([s[0], s[1], s[2], p[2]], pass_key(view.cells(s), above))
             })
-            .collect()
+            .unzip();
+        Vertices {
+            first,
+            model: own,
+            borrowed,
+            projected,
+            keys,
+        }
     }
 
     /// Adds a whole mesh.
     pub fn add_mesh(&mut self, mesh: &Mesh) -> Result<(), usize> {
-        let vertices = Vertices {
-            first: 0,
-            model: &mesh.vertices,
-            projected: self.project(&mesh.vertices),
-            borrowed: &[],
-            borrowed_projected: Vec::new(),
-        };
+        let vertices = self.vertices(0, &mesh.vertices, &[]);
         self.add(&mesh.triangles, &vertices)
     }
 
     /// Adds a chunk's triangles (corners resolved through the chunk's own and borrowed
     /// vertices).
     pub fn add_chunk(&mut self, chunk: &MeshChunk) -> Result<(), usize> {
-        let own = self.project(&chunk.vertices);
-        let borrowed: Vec<[f32; 3]> = chunk.borrowed.iter().map(|b| b.1).collect();
-        let vertices = Vertices {
-            first: chunk.first_vertex,
-            model: &chunk.vertices,
-            projected: own,
-            borrowed: &chunk.borrowed,
-            borrowed_projected: self.project(&borrowed),
-        };
+        let vertices = self.vertices(chunk.first_vertex, &chunk.vertices, &chunk.borrowed);
         self.add(&chunk.triangles, &vertices)
     }
 

@@ -246,6 +246,24 @@ impl Raster {
         self.camera.project(p.map(f64::from)).map(|v| v as f32)
     }
 
+    /// The cells between pixel centres that screen position `s` lies in, across and down:
+    /// `i` when it lies strictly between the centres of columns `i − 1` and `i` (`0` before
+    /// the first centre, `n` after the last), `None` on a centre's line, or NaN; the same for
+    /// rows. A triangle whose corners share a cell on either axis covers no pixel centre
+    /// ([`Raster::covers`] is `None`): most triangles of a big mesh are seen to be passed over
+    /// by comparing numbers worked out once per vertex.
+    pub fn cells(&self, s: [f32; 3]) -> [Option<u32>; 2] {
+        let axis = |v: f32, n: usize| {
+            // Clamped to non-whole bounds, so a point off the panel is never on a line.
+            let v = (f64::from(v) - 0.5).clamp(-0.5, n as f64 - 0.5);
+            // Within those bounds truncation is exact and rounds toward zero (no `floor`).
+            let t = v as i64;
+            let on_line = t as f64 == v || v.is_nan();
+            (!on_line).then(|| (t - i64::from(t as f64 > v) + 1) as u32)
+        };
+        [axis(s[0], self.width), axis(s[1], self.height)]
+    }
+
     /// The pixel columns and rows whose centres the bounding box of a triangle of screen
     /// positions `s` holds; `None` when it covers no pixel centre. Most triangles of a big
     /// mesh are smaller than a pixel and cover none, so that is decided first, from the
@@ -363,5 +381,78 @@ impl Tile {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_triangle_within_one_cell_covers_no_pixel_centre() {
+        let (width, height) = (24, 16);
+        let camera = Camera::fit(
+            [0.0, 0.0, 1.0],
+            [0.0, 1.0, 0.0],
+            [[0.0; 3], [1.0; 3]],
+            (width, height),
+            0.9,
+        );
+        let raster = Raster::new(camera, (width, height), [0; 3]);
+        // Coordinates on centres, between them, on the panel's edges, far off it, NaN.
+        let mut values: Vec<f32> = (-12..=4 * width as i32 + 12)
+            .map(|k| k as f32 / 4.0)
+            .collect();
+        values.extend([
+            -1e9,
+            1e9,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            0.5001,
+            0.4999,
+        ]);
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut pick = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            values[(state % values.len() as u64) as usize]
+        };
+        let (mut shared, mut covering) = (0, 0);
+        for round in 0..300_000 {
+            // Corners near one another (most share a cell) or anywhere.
+            let near = [pick(), pick()];
+            let mut corner = |k: usize| {
+                let nudge = [pick(), pick()].map(|v| if v.is_finite() { v % 0.5 } else { 0.0 });
+                match k % 2 {
+                    0 => [near[0] + nudge[0], near[1] + nudge[1], 0.0],
+                    _ => [pick(), pick(), 0.0],
+                }
+            };
+            let s: [[f32; 3]; 3] =
+                std::array::from_fn(|c| corner(if round % 3 == 0 { c } else { 0 }));
+            let cells = s.map(|p| raster.cells(p));
+            let cover = raster.covers(s);
+            covering += usize::from(cover.is_some());
+            for axis in 0..2 {
+                let cell = cells[0][axis];
+                if cell.is_some() && cells.iter().all(|c| c[axis] == cell) {
+                    shared += 1;
+                    assert_eq!(cover, None, "{s:?} in cell {cell:?} on axis {axis}");
+                }
+            }
+            // A point's cell is the pair of centres around it.
+            for (p, cells) in s.iter().zip(cells) {
+                for (v, c, n) in [(p[0], cells[0], width), (p[1], cells[1], height)] {
+                    let Some(c) = c else { continue };
+                    let v = f64::from(v);
+                    assert!(c == 0 || v > f64::from(c) - 0.5, "{v} in cell {c}");
+                    assert!(c as usize == n || v < f64::from(c) + 0.5, "{v} in cell {c}");
+                }
+            }
+        }
+        // Both cases were met often.
+        assert!(shared > 10_000 && covering > 10_000, "{shared} {covering}");
     }
 }

@@ -57,8 +57,13 @@ impl Section {
     /// Whether the plane meets a triangle of corner heights `z` (as [`Section::segment`]
     /// decides), so that only those triangles need their corners looked up.
     pub fn meets(&self, z: [f32; 3]) -> bool {
-        let ups = z.iter().filter(|&&z| f64::from(z) >= self.z0).count();
+        let ups = z.iter().filter(|&&z| self.above(z)).count();
         ups == 1 || ups == 2
+    }
+
+    /// Whether a corner at height `z` counts as above the plane.
+    pub fn above(&self, z: f32) -> bool {
+        f64::from(z) >= self.z0
     }
 
     /// The cut segment of one triangle, in pixels: `None` when the plane misses it.
