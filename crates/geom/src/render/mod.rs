@@ -45,18 +45,27 @@ const BATCH: usize = 1 << 18;
 const RUN: usize = 4096;
 
 /// The vertices triangles are added with: ids from `first` index `model` (a chunk's own),
-/// smaller ones `borrowed` (sorted by id). Each is kept projected as the view's pixel position
-/// and depth ([`Raster::screen`]) with its model `z` (for the section's plane test), and as a
-/// [`pass_key`]: slots `0..borrowed.len()` are the borrowed vertices', then the own ones'.
+/// smaller ones `borrowed` (sorted by id). Each has its [`pass_key`] in `keys`: slots
+/// `0..borrowed.len()` are the borrowed vertices', then the own ones'. Only the corners of
+/// the few triangles not passed over are projected (again, to the same bits), so nothing
+/// else is kept per vertex.
 struct Vertices<'a> {
     first: u32,
     model: &'a [[f32; 3]],
     borrowed: &'a [(u32, [f32; 3])],
-    projected: Vec<[f32; 4]>,
+    keys: &'a [u64],
+}
+
+/// Arrays kept from one chunk to the next: a tiling's hundreds of chunks would otherwise
+/// each fault fresh pages in for them.
+#[derive(Default)]
+struct Scratch {
     keys: Vec<u64>,
+    flats: Vec<Flat>,
 }
 
 impl Vertices<'_> {
+    #[inline]
     fn slot(&self, id: u32) -> Option<usize> {
         if id >= self.first {
             let slot = self.borrowed.len() + (id - self.first) as usize;
@@ -85,7 +94,8 @@ fn pass_key([across, down]: [Option<u32>; 2], above: bool) -> u64 {
 }
 
 /// Whether a triangle of corners with these [`pass_key`]s may be passed over.
-fn passed_over([a, b, c]: [u64; 3]) -> bool {
+#[inline]
+fn passed_over(a: u64, b: u64, c: u64) -> bool {
     const ACROSS: u64 = (1 << 31) - 1;
     const DOWN: u64 = ACROSS << 31;
     const NO_CELL: u64 = 1 << 30 | 1 << 61;
@@ -173,6 +183,7 @@ pub struct Preview {
     layout: Layout,
     view: Raster,
     section: Option<Section>,
+    scratch: Scratch,
 }
 
 impl Preview {
@@ -195,6 +206,7 @@ impl Preview {
             layout,
             view,
             section,
+            scratch: Scratch::default(),
         }
     }
 
@@ -216,7 +228,12 @@ impl Preview {
     /// and filled in triangle order. Only triangles whose corners' [`pass_key`]s differ are
     /// looked at further, and a corner's model position is looked up only for the few that
     /// cover a pixel centre or meet the section's plane.
-    fn add(&mut self, triangles: &[[u32; 3]], vertices: &Vertices) -> Result<(), usize> {
+    fn add(
+        &mut self,
+        triangles: &[[u32; 3]],
+        vertices: &Vertices,
+        flats: &mut Vec<Flat>,
+    ) -> Result<(), usize> {
         let mut start = 0;
         while start < triangles.len() {
             let end = (start + BATCH).min(triangles.len());
@@ -227,31 +244,43 @@ impl Preview {
                 .map(|first| {
                     let (mut flats, mut cuts) = (Vec::new(), Vec::new());
                     let last = (first + RUN).min(end);
+                    // Written out rather than through array `map`s, which were left as calls
+                    // in this loop, the hottest of a big preview.
+                    let keys = vertices.keys;
                     for (i, t) in (first..last).zip(&triangles[first..last]) {
-                        let [a, b, c] = t.map(|id| vertices.slot(id));
+                        let (a, b, c) = (
+                            vertices.slot(t[0]),
+                            vertices.slot(t[1]),
+                            vertices.slot(t[2]),
+                        );
                         let (Some(a), Some(b), Some(c)) = (a, b, c) else {
                             return Err(i);
                         };
-                        if passed_over([a, b, c].map(|k| vertices.keys[k])) {
+                        if passed_over(keys[a], keys[b], keys[c]) {
                             continue;
                         }
-                        let [pa, pb, pc] = [a, b, c].map(|k| vertices.projected[k]);
-                        let model = || [a, b, c].map(|k| vertices.model(k));
-                        let screen = [pa, pb, pc].map(|p| [p[0], p[1], p[2]]);
+                        // Projected again (the same bits as for its key).
+                        let model = [vertices.model(a), vertices.model(b), vertices.model(c)];
+                        let screen = [
+                            view.screen(model[0]),
+                            view.screen(model[1]),
+                            view.screen(model[2]),
+                        ];
                         if let Some(cover) = view.covers(screen) {
-                            flats.push(view.flatten(screen, cover, model()));
+                            flats.push(view.flatten(screen, cover, model));
                         }
                         if let Some(s) = section
-                            && s.meets([pa[3], pb[3], pc[3]])
+                            && s.meets([model[0][2], model[1][2], model[2][2]])
                         {
-                            cuts.extend(s.segment(model()));
+                            cuts.extend(s.segment(model));
                         }
                     }
                     Ok((flats, cuts))
                 })
                 .collect::<Result<Vec<(Vec<Flat>, Vec<Segment>)>, usize>>()?;
-            let flats: Vec<Flat> = runs.iter().flat_map(|r| r.0.iter().copied()).collect();
-            self.view.draw(&flats);
+            flats.clear();
+            flats.extend(runs.iter().flat_map(|r| r.0.iter().copied()));
+            self.view.draw(flats);
             if let Some(section) = &mut self.section {
                 for cut in runs.iter().flat_map(|r| r.1.iter()) {
                     section.cross(*cut);
@@ -262,46 +291,55 @@ impl Preview {
         Ok(())
     }
 
-    /// `borrowed` then `own` positions as [`Vertices`] keeps them: projected once, however
-    /// many triangles share them.
-    fn vertices<'a>(
-        &self,
+    /// Adds `triangles` whose corners are `first, first + 1, …` in `own` and, below
+    /// `first`, the ids of `borrowed`; each vertex is placed once, however many triangles
+    /// share it.
+    fn add_indexed(
+        &mut self,
+        triangles: &[[u32; 3]],
         first: u32,
-        own: &'a [[f32; 3]],
-        borrowed: &'a [(u32, [f32; 3])],
-    ) -> Vertices<'a> {
+        own: &[[f32; 3]],
+        borrowed: &[(u32, [f32; 3])],
+    ) -> Result<(), usize> {
+        let mut scratch = std::mem::take(&mut self.scratch);
         let (view, section) = (&self.view, self.section.as_ref());
-        let (projected, keys) = borrowed
-            .par_iter()
-            .map(|b| b.1)
-            .chain(own.par_iter().copied())
-            .with_min_len(RUN)
-            .map(|p| {
-                let s = view.screen(p);
-                let above = section.is_some_and(|c| c.above(p[2]));
-                ([s[0], s[1], s[2], p[2]], pass_key(view.cells(s), above))
-            })
-            .unzip();
-        Vertices {
+        scratch.keys.clear();
+        scratch.keys.par_extend(
+            borrowed
+                .par_iter()
+                .map(|b| b.1)
+                .chain(own.par_iter().copied())
+                .with_min_len(RUN)
+                .map(|p| {
+                    let above = section.is_some_and(|c| c.above(p[2]));
+                    pass_key(view.cells(view.screen(p)), above)
+                }),
+        );
+        let vertices = Vertices {
             first,
             model: own,
             borrowed,
-            projected,
-            keys,
-        }
+            keys: &scratch.keys,
+        };
+        let added = self.add(triangles, &vertices, &mut scratch.flats);
+        self.scratch = scratch;
+        added
     }
 
     /// Adds a whole mesh.
     pub fn add_mesh(&mut self, mesh: &Mesh) -> Result<(), usize> {
-        let vertices = self.vertices(0, &mesh.vertices, &[]);
-        self.add(&mesh.triangles, &vertices)
+        self.add_indexed(&mesh.triangles, 0, &mesh.vertices, &[])
     }
 
     /// Adds a chunk's triangles (corners resolved through the chunk's own and borrowed
     /// vertices).
     pub fn add_chunk(&mut self, chunk: &MeshChunk) -> Result<(), usize> {
-        let vertices = self.vertices(chunk.first_vertex, &chunk.vertices, &chunk.borrowed);
-        self.add(&chunk.triangles, &vertices)
+        self.add_indexed(
+            &chunk.triangles,
+            chunk.first_vertex,
+            &chunk.vertices,
+            &chunk.borrowed,
+        )
     }
 
     /// The finished image, with `caption` (a title line, then warnings) below the panels.

@@ -116,13 +116,15 @@ impl Camera {
 }
 
 /// A triangle ready to draw: corners in pixels (f32, so a shared corner is the same bits in
-/// every triangle using it), depths, colour, and the pixel box it may cover.
+/// every triangle using it), depths, normal, and the pixel box it may cover. It is shaded
+/// only when it wins a pixel: most triangles of a big mesh lie behind others.
 #[derive(Clone, Copy)]
 pub struct Flat {
     x: [f32; 3],
     y: [f32; 3],
     z: [f32; 3],
-    rgb: Rgb,
+    /// The outward normal, unnormalised.
+    normal: [f64; 3],
     /// Pixel columns `x0..x1` and rows `y0..y1` whose centres the bounding box holds.
     cols: (u32, u32),
     rows: (u32, u32),
@@ -146,7 +148,31 @@ pub struct Raster {
     height: usize,
     tiles_x: usize,
     tiles: Vec<Tile>,
+    lighting: Lighting,
+}
+
+/// Two directional lights fixed to the camera, and the direction toward the viewer (which
+/// tells a face seen from behind).
+#[derive(Clone, Copy)]
+struct Lighting {
+    toward: [f64; 3],
     lights: [[f64; 3]; 2],
+}
+
+impl Lighting {
+    /// The colour of a face of (unnormalised) outward normal `n`.
+    fn shade(&self, n: [f64; 3]) -> Rgb {
+        let n = normalize(n);
+        let front = dot(n, self.toward) >= 0.0;
+        let (n, base) = if front {
+            (n, FRONT)
+        } else {
+            ([-n[0], -n[1], -n[2]], BACK)
+        };
+        let light =
+            0.22 + 0.68 * dot(n, self.lights[0]).max(0.0) + 0.30 * dot(n, self.lights[1]).max(0.0);
+        base.map(|c| (255.0 * (c * light).clamp(0.0, 1.0)).round() as u8)
+    }
 }
 
 /// Whether the directed edge `a → b` owns the pixel centres exactly on it: exactly one of
@@ -222,22 +248,11 @@ impl Raster {
             height,
             tiles_x,
             tiles,
-            lights: [key, fill],
+            lighting: Lighting {
+                toward: camera.toward,
+                lights: [key, fill],
+            },
         }
-    }
-
-    /// The colour of a face of (unnormalised) outward normal `n`.
-    fn shade(&self, n: [f64; 3]) -> Rgb {
-        let n = normalize(n);
-        let front = dot(n, self.camera.toward) >= 0.0;
-        let (n, base) = if front {
-            (n, FRONT)
-        } else {
-            ([-n[0], -n[1], -n[2]], BACK)
-        };
-        let light =
-            0.22 + 0.68 * dot(n, self.lights[0]).max(0.0) + 0.30 * dot(n, self.lights[1]).max(0.0);
-        base.map(|c| (255.0 * (c * light).clamp(0.0, 1.0)).round() as u8)
     }
 
     /// The pixel position and depth of model point `p`, in `f32`: a vertex is projected once
@@ -252,6 +267,7 @@ impl Raster {
     /// rows. A triangle whose corners share a cell on either axis covers no pixel centre
     /// ([`Raster::covers`] is `None`): most triangles of a big mesh are seen to be passed over
     /// by comparing numbers worked out once per vertex.
+    #[inline]
     pub fn cells(&self, s: [f32; 3]) -> [Option<u32>; 2] {
         let axis = |v: f32, n: usize| {
             // Clamped to non-whole bounds, so a point off the panel is never on a line.
@@ -283,7 +299,8 @@ impl Raster {
     }
 
     /// A triangle ready to draw: screen positions `s` covering `(cols, rows)`
-    /// ([`Raster::covers`]), shaded by the normal of its model corners `corners`.
+    /// ([`Raster::covers`]), shaded (when drawn) by the normal of its model corners
+    /// `corners`.
     pub fn flatten(
         &self,
         s: [[f32; 3]; 3],
@@ -296,7 +313,7 @@ impl Raster {
             x: s.map(|c| c[0]),
             y: s.map(|c| c[1]),
             z: s.map(|c| c[2]),
-            rgb: self.shade(n),
+            normal: n,
             cols,
             rows,
         }
@@ -316,12 +333,13 @@ impl Raster {
                 }
             }
         }
+        let lighting = &self.lighting;
         self.tiles
             .par_iter_mut()
             .filter(|t| !t.list.is_empty())
             .for_each(|tile| {
                 for k in 0..tile.list.len() {
-                    tile.fill(&flats[tile.list[k] as usize]);
+                    tile.fill(&flats[tile.list[k] as usize], lighting);
                 }
             });
     }
@@ -342,7 +360,7 @@ impl Raster {
 
 impl Tile {
     /// Draws the part of `f` within this tile.
-    fn fill(&mut self, f: &Flat) {
+    fn fill(&mut self, f: &Flat, lighting: &Lighting) {
         let v = [0, 1, 2].map(|k| (f64::from(f.x[k]), f64::from(f.y[k])));
         let area = edge(v[0], v[1], v[2]);
         if area == 0.0 || !area.is_finite() {
@@ -358,6 +376,15 @@ impl Tile {
         let area = area.abs();
         let edges = [(v[1], v[2]), (v[2], v[0]), (v[0], v[1])];
         let owned = edges.map(|(a, b)| owns(a, b));
+        // Each edge in [`edge`]'s canonical order, worked out once rather than per pixel:
+        // the same products, so the same bits.
+        let canonical = edges.map(|(a, b)| {
+            if (b.0, b.1) < (a.0, a.1) {
+                (b, (a.0 - b.0, a.1 - b.1), -1.0)
+            } else {
+                (a, (b.0 - a.0, b.1 - a.1), 1.0)
+            }
+        });
         let cols = (
             (f.cols.0 as usize).max(self.x0),
             (f.cols.1 as usize).min(self.x0 + self.width),
@@ -366,10 +393,12 @@ impl Tile {
             (f.rows.0 as usize).max(self.y0),
             (f.rows.1 as usize).min(self.y0 + self.height),
         );
+        let mut rgb = None;
         for py in rows.0..rows.1 {
             for px in cols.0..cols.1 {
                 let p = (px as f64 + 0.5, py as f64 + 0.5);
-                let w = [0, 1, 2].map(|k| edge(edges[k].0, edges[k].1, p));
+                let w =
+                    canonical.map(|(a, d, sign)| sign * (d.0 * (p.1 - a.1) - d.1 * (p.0 - a.0)));
                 if (0..3).any(|k| w[k] < 0.0 || (w[k] == 0.0 && !owned[k])) {
                     continue;
                 }
@@ -377,7 +406,7 @@ impl Tile {
                 let at = (py - self.y0) * self.width + (px - self.x0);
                 if depth < self.depth[at] {
                     self.depth[at] = depth;
-                    self.rgb[at] = f.rgb;
+                    self.rgb[at] = *rgb.get_or_insert_with(|| lighting.shade(f.normal));
                 }
             }
         }
