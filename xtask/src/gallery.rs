@@ -4,7 +4,7 @@
 //! checkout gets no `out/` or cache) with small previews, and the preview of its first output
 //! (by name, or the one [`CHOSEN`] names) is copied to `docs/gallery/EXAMPLE.png`. The images
 //! are a pure function of the examples and the code, so rerunning changes no byte unless one
-//! of those did.
+//! of those did. An example writing no files (`formats = []`) has no preview and is skipped.
 
 use std::path::Path;
 use std::process::Command;
@@ -53,6 +53,16 @@ pub fn run() -> Result<(), String> {
         let reports: serde_json::Value =
             serde_json::from_slice(&out.stdout).map_err(|e| format!("{stem}: {e}"))?;
         let wanted = CHOSEN.iter().find(|(e, _)| *e == stem).map(|(_, o)| *o);
+        let writes_files = reports
+            .as_array()
+            .into_iter()
+            .flatten()
+            .any(|r| r["files"].as_array().is_some_and(|f| !f.is_empty()));
+        if !writes_files {
+            // `formats = []` (an optimiser's loop reads the report alone): no preview, by design.
+            println!("{stem}: writes no files, so no preview (skipped)");
+            continue;
+        }
         let png = reports
             .as_array()
             .into_iter()
