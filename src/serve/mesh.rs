@@ -18,6 +18,7 @@
 //! - The encoding ([`encode`]) quantizes positions to `u16` over the bounding box (an error of
 //!   at most 1/131070 of the box, invisible on screen), indices stay `u32`.
 
+use latticebuild_geom::floor::floor_i64;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hash, Hasher};
 use std::io::{self, Read};
@@ -111,14 +112,6 @@ impl Recent {
         let [x, y, z] = key.0;
         low(x) | (low(y) << RECENT_BITS) | (low(z) << (2 * RECENT_BITS))
     }
-}
-
-/// `f64::floor` as an integer, without the call into libm that `floor` is on x86-64's
-/// baseline (no SSE4.1 rounding instruction): 9 % of the load. The same value for every
-/// input, including NaN (0) and values beyond `i64`'s range (saturated).
-fn floor_i64(v: f64) -> i64 {
-    let toward_zero = v as i64;
-    toward_zero.saturating_sub(i64::from(toward_zero as f64 > v))
 }
 
 /// Where a corner welds, as a [`Key`]: a pure function of the corner, so the STL's reader
@@ -751,34 +744,6 @@ mod tests {
         let mut none = Vec::new();
         drop_repeats(&mut none);
         assert!(none.is_empty());
-    }
-
-    #[test]
-    fn floor_without_libm_is_floor() {
-        let values = [
-            0.0,
-            -0.0,
-            0.5,
-            -0.5,
-            1.0,
-            -1.0,
-            2.999_999_999_999_999_6,
-            -2.000_000_000_000_000_4,
-            1e-300,
-            -1e-300,
-            4.5e15,
-            -4.5e15 - 0.5,
-            9.3e18,
-            -9.3e18,
-            1e300,
-            -1e300,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::NAN,
-        ];
-        for v in values {
-            assert_eq!(floor_i64(v), v.floor() as i64, "{v}");
-        }
     }
 
     #[test]

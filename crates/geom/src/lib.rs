@@ -16,6 +16,7 @@ pub mod distance;
 pub mod element;
 pub mod expr;
 pub mod field;
+pub mod floor;
 pub mod graded;
 pub mod islands;
 pub mod measure;

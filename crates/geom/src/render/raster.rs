@@ -21,6 +21,7 @@
 
 use rayon::prelude::*;
 
+use crate::floor::floor_i64;
 use crate::vec3::{cross, dot, sub};
 
 /// Tile edge in pixels.
@@ -255,8 +256,8 @@ impl Raster {
         }
     }
 
-    /// The pixel position and depth of model point `p`, in `f32`: a vertex is projected once
-    /// and every triangle using it gets the same bits.
+    /// The pixel position and depth of model point `p`, in `f32`: a pure function, so every
+    /// triangle using a vertex gets the same bits for it.
     pub fn screen(&self, p: [f32; 3]) -> [f32; 3] {
         self.camera.project(p.map(f64::from)).map(|v| v as f32)
     }
@@ -272,10 +273,9 @@ impl Raster {
         let axis = |v: f32, n: usize| {
             // Clamped to non-whole bounds, so a point off the panel is never on a line.
             let v = (f64::from(v) - 0.5).clamp(-0.5, n as f64 - 0.5);
-            // Within those bounds truncation is exact and rounds toward zero (no `floor`).
-            let t = v as i64;
-            let on_line = t as f64 == v || v.is_nan();
-            (!on_line).then(|| (t - i64::from(t as f64 > v) + 1) as u32)
+            let below = floor_i64(v);
+            let on_line = below as f64 == v || v.is_nan();
+            (!on_line).then(|| (below + 1) as u32)
         };
         [axis(s[0], self.width), axis(s[1], self.height)]
     }
