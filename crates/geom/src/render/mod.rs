@@ -16,6 +16,7 @@
 //! - PNG bytes come from the `png` crate at fixed settings: same pixels, same bytes.
 
 pub mod font;
+mod pass;
 pub mod raster;
 pub mod section;
 
@@ -24,6 +25,7 @@ use std::io::{self, Write};
 use crate::mesh::{Mesh, MeshChunk};
 use rayon::prelude::*;
 
+use pass::Keyed;
 use raster::{Camera, Flat, Raster, Rgb};
 use section::{Section, Segment};
 
@@ -42,66 +44,14 @@ const FILL: f64 = 0.86;
 /// Triangles per batch: bounds the memory of a whole-mesh render.
 const BATCH: usize = 1 << 18;
 /// Triangles one task takes in a row, so the thread pool's cost per task is small against it.
-const RUN: usize = 4096;
-
-/// The vertices triangles are added with: ids from `first` index `model` (a chunk's own),
-/// smaller ones `borrowed` (sorted by id). Each has its [`pass_key`] in `keys`: slots
-/// `0..borrowed.len()` are the borrowed vertices', then the own ones'. Only the corners of
-/// the few triangles not passed over are projected (again, to the same bits), so nothing
-/// else is kept per vertex.
-struct Vertices<'a> {
-    first: u32,
-    model: &'a [[f32; 3]],
-    borrowed: &'a [(u32, [f32; 3])],
-    keys: &'a [u64],
-}
+const RUN: usize = pass::RUN;
 
 /// Arrays kept from one chunk to the next: a tiling's hundreds of chunks would otherwise
 /// each fault fresh pages in for them.
 #[derive(Default)]
 struct Scratch {
-    keys: Vec<u64>,
+    keys: pass::Keys,
     flats: Vec<Flat>,
-}
-
-impl Vertices<'_> {
-    #[inline]
-    fn slot(&self, id: u32) -> Option<usize> {
-        if id >= self.first {
-            let slot = self.borrowed.len() + (id - self.first) as usize;
-            return (slot < self.keys.len()).then_some(slot);
-        }
-        self.borrowed.binary_search_by_key(&id, |b| b.0).ok()
-    }
-
-    fn model(&self, slot: usize) -> [f32; 3] {
-        match slot.checked_sub(self.borrowed.len()) {
-            Some(own) => self.model[own],
-            None => self.borrowed[slot].1,
-        }
-    }
-}
-
-/// A number per vertex such that a triangle whose corners' numbers agree on the view's cells
-/// across or down ([`Raster::cells`]) and on the side of the section's plane neither covers a
-/// pixel centre nor meets the plane, so it is passed over without looking further (most
-/// triangles of a tiling of tens of millions, which are smaller than a pixel). Bits 0–29
-/// hold the cell across, bit 30 is set when there is none; bits 31–60 and 61 the same down;
-/// bit 62 is the side of the plane. Cells are below 2³⁰ (no image is that wide).
-fn pass_key([across, down]: [Option<u32>; 2], above: bool) -> u64 {
-    let axis = |cell: Option<u32>| cell.map_or(1 << 30, |c| u64::from(c) & ((1 << 30) - 1));
-    axis(across) | axis(down) << 31 | u64::from(above) << 62
-}
-
-/// Whether a triangle of corners with these [`pass_key`]s may be passed over.
-#[inline]
-fn passed_over(a: u64, b: u64, c: u64) -> bool {
-    const ACROSS: u64 = (1 << 31) - 1;
-    const DOWN: u64 = ACROSS << 31;
-    const NO_CELL: u64 = 1 << 30 | 1 << 61;
-    let differ = (a ^ b) | (a ^ c);
-    let shared = |axis: u64| differ & axis == 0 && a & axis & NO_CELL == 0;
-    (shared(ACROSS) || shared(DOWN)) && differ & 1 << 62 == 0
 }
 
 /// One line of the caption.
@@ -225,13 +175,12 @@ impl Preview {
 
     /// Adds `triangles`, their corners found in `vertices`; `Err(i)` when triangle `i` has
     /// one that is not there. Runs of triangles are projected and cut in parallel, then drawn
-    /// and filled in triangle order. Only triangles whose corners' [`pass_key`]s differ are
-    /// looked at further, and a corner's model position is looked up only for the few that
-    /// cover a pixel centre or meet the section's plane.
+    /// and filled in triangle order. Only the few triangles not passed over ([`pass`]) are
+    /// looked at: their corners projected, their box and cut found.
     fn add(
         &mut self,
         triangles: &[[u32; 3]],
-        vertices: &Vertices,
+        vertices: &Keyed,
         flats: &mut Vec<Flat>,
     ) -> Result<(), usize> {
         let mut start = 0;
@@ -244,30 +193,22 @@ impl Preview {
                 .map(|first| {
                     let (mut flats, mut cuts) = (Vec::new(), Vec::new());
                     let last = (first + RUN).min(end);
-                    // Written out rather than through array `map`s, which were left as calls
-                    // in this loop, the hottest of a big preview.
-                    let keys = vertices.keys;
-                    for (i, t) in (first..last).zip(&triangles[first..last]) {
-                        let (a, b, c) = (
-                            vertices.slot(t[0]),
-                            vertices.slot(t[1]),
-                            vertices.slot(t[2]),
-                        );
-                        let (Some(a), Some(b), Some(c)) = (a, b, c) else {
+                    let (looked_at, count) = vertices.look_at(&triangles[first..last]);
+                    for &k in &looked_at[..count] {
+                        let i = first + k as usize;
+                        let t = triangles[i];
+                        let (Some(a), Some(b), Some(c)) = (
+                            vertices.model(t[0]),
+                            vertices.model(t[1]),
+                            vertices.model(t[2]),
+                        ) else {
                             return Err(i);
                         };
-                        if passed_over(keys[a], keys[b], keys[c]) {
-                            continue;
-                        }
                         // Projected again (the same bits as for its key).
-                        let model = [vertices.model(a), vertices.model(b), vertices.model(c)];
-                        let screen = [
-                            view.screen(model[0]),
-                            view.screen(model[1]),
-                            view.screen(model[2]),
-                        ];
+                        let model = [a, b, c];
+                        let screen = model.map(|p| view.screen(p));
                         if let Some(cover) = view.covers(screen) {
-                            flats.push(view.flatten(screen, cover, model));
+                            flats.extend(view.flatten(screen, cover, model));
                         }
                         if let Some(s) = section
                             && s.meets([model[0][2], model[1][2], model[2][2]])
@@ -302,25 +243,8 @@ impl Preview {
         borrowed: &[(u32, [f32; 3])],
     ) -> Result<(), usize> {
         let mut scratch = std::mem::take(&mut self.scratch);
-        let (view, section) = (&self.view, self.section.as_ref());
-        scratch.keys.clear();
-        scratch.keys.par_extend(
-            borrowed
-                .par_iter()
-                .map(|b| b.1)
-                .chain(own.par_iter().copied())
-                .with_min_len(RUN)
-                .map(|p| {
-                    let above = section.is_some_and(|c| c.above(p[2]));
-                    pass_key(view.cells(view.screen(p)), above)
-                }),
-        );
-        let vertices = Vertices {
-            first,
-            model: own,
-            borrowed,
-            keys: &scratch.keys,
-        };
+        let z0 = self.section.as_ref().map(|s| s.z0);
+        let vertices = scratch.keys.key(&self.view, z0, first, own, borrowed);
         let added = self.add(triangles, &vertices, &mut scratch.flats);
         self.scratch = scratch;
         added

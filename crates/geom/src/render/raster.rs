@@ -2,18 +2,22 @@
 //!
 //! Invariants:
 //! - Deterministic for any thread count: triangles come in batches, in order, each projected
-//!   by pure functions ([`Raster::covers`], [`Raster::flatten`], run in parallel by the
-//!   caller); a batch is binned
-//!   to tiles in triangle order, and each tile draws its triangles in that order, keeping a
-//!   fragment only when it is strictly nearer (the first triangle wins a tie). So a pixel's
-//!   colour depends only on the sequence of triangles, never on which thread drew which tile.
+//!   by pure functions ([`Raster::screen`], [`Raster::covers`], [`Raster::flatten`], run in
+//!   parallel by the caller); a batch is binned to tiles in triangle order, and each tile
+//!   draws its triangles in that order, keeping a fragment only when it is strictly nearer
+//!   (the first triangle wins a tie). So a pixel's colour depends only on the sequence of
+//!   triangles, never on which thread drew which tile.
 //! - Watertight: a pixel centre on an edge shared by two triangles is drawn by exactly one of
-//!   them. Edge functions are evaluated with the edge's endpoints in a canonical order (then
-//!   negated), so both triangles compute the same value, and an edge owns its zero line in one
-//!   direction only (see [`owns`]).
+//!   them. The edge function at a centre `p` is `(a − p) × (b − p)`, whose bits for `b → a`
+//!   are exactly the negated bits for `a → b`, so both triangles see the same value, and an
+//!   edge owns its zero line in one direction only (see [`owns`]).
 //! - Flat shading with two directional lights fixed to the camera; a face seen from behind
 //!   (its outward normal pointing away from the viewer) is tinted red, so an open or inverted
 //!   surface shows where its inside is visible.
+//!
+//! - Most triangles of a big mesh cover at most one pixel centre: one whose box holds a
+//!   single centre is tested against it when it is made ([`Flat::Dot`]), so only those that
+//!   cover it reach the tiles.
 //!
 //! Why no crate: what is needed is ~200 lines (orthographic camera, edge functions, z-buffer),
 //! and the determinism and streaming above (chunks added as they are read) are easier to
@@ -21,7 +25,6 @@
 
 use rayon::prelude::*;
 
-use crate::floor::floor_i64;
 use crate::vec3::{cross, dot, sub};
 
 /// Tile edge in pixels.
@@ -107,6 +110,7 @@ impl Camera {
     }
 
     /// The pixel position and depth of `p`.
+    #[inline]
     pub fn project(&self, p: [f64; 3]) -> [f64; 3] {
         [
             self.origin[0] + dot(p, self.right) * self.scale,
@@ -116,19 +120,100 @@ impl Camera {
     }
 }
 
-/// A triangle ready to draw: corners in pixels (f32, so a shared corner is the same bits in
-/// every triangle using it), depths, normal, and the pixel box it may cover. It is shaded
-/// only when it wins a pixel: most triangles of a big mesh lie behind others.
+/// A triangle ready to draw. Most triangles of a big mesh are smaller than a pixel: one
+/// whose box holds a single pixel centre is tested against it when it is made, and kept (as a
+/// [`Flat::Dot`]) only if it covers it. It is shaded only when it wins a pixel: most lie
+/// behind others.
 #[derive(Clone, Copy)]
-pub struct Flat {
-    x: [f32; 3],
-    y: [f32; 3],
-    z: [f32; 3],
-    /// The outward normal, unnormalised.
-    normal: [f64; 3],
-    /// Pixel columns `x0..x1` and rows `y0..y1` whose centres the bounding box holds.
-    cols: (u32, u32),
-    rows: (u32, u32),
+pub enum Flat {
+    /// Corners in pixels (f32, so a shared corner is the same bits in every triangle using
+    /// it), depths, the outward normal (unnormalised), and the pixel columns `x0..x1` and
+    /// rows `y0..y1` whose centres its box holds.
+    Spans {
+        x: [f32; 3],
+        y: [f32; 3],
+        z: [f32; 3],
+        normal: [f64; 3],
+        cols: (u32, u32),
+        rows: (u32, u32),
+    },
+    /// A triangle covering the one pixel centre `at` in its box, at `depth` there.
+    Dot {
+        at: (u32, u32),
+        depth: f32,
+        normal: [f64; 3],
+    },
+}
+
+impl Flat {
+    /// The pixel columns and rows it may draw.
+    fn reach(&self) -> ((u32, u32), (u32, u32)) {
+        match *self {
+            Flat::Spans { cols, rows, .. } => (cols, rows),
+            Flat::Dot { at, .. } => ((at.0, at.0 + 1), (at.1, at.1 + 1)),
+        }
+    }
+}
+
+/// A triangle's corners in pixels, tested against pixel centres: it covers a centre `p`
+/// where its three edge functions there, `(a − p) × (b − p)` for each edge `a → b`, have one
+/// sign, or are zero on an edge that owns its line ([`owns`]). Two triangles sharing an edge
+/// compute the same bits for it, negated: the products are the same, and a difference
+/// negates exactly. So a centre on a shared edge is drawn by exactly one of them.
+struct Corners {
+    x: [f64; 3],
+    y: [f64; 3],
+    z: [f64; 3],
+}
+
+impl Corners {
+    #[inline]
+    fn new(x: [f32; 3], y: [f32; 3], z: [f32; 3]) -> Corners {
+        Corners {
+            x: x.map(f64::from),
+            y: y.map(f64::from),
+            z: z.map(f64::from),
+        }
+    }
+
+    /// The depth at the centre of pixel `(px, py)`, if the triangle covers it.
+    #[inline]
+    fn depth_at(&self, px: u32, py: u32) -> Option<f32> {
+        let (cx, cy) = (f64::from(px) + 0.5, f64::from(py) + 0.5);
+        let rx = self.x.map(|x| x - cx);
+        let ry = self.y.map(|y| y - cy);
+        // Edge `k` runs from corner `k + 1` to `k + 2`.
+        let w = [
+            rx[1] * ry[2] - ry[1] * rx[2],
+            rx[2] * ry[0] - ry[2] * rx[0],
+            rx[0] * ry[1] - ry[0] * rx[1],
+        ];
+        // Twice the area, signed by the triangle's turn on screen (NaN for a bad corner).
+        let area = w[0] + w[1] + w[2];
+        let turn = if area > 0.0 {
+            1.0
+        } else if area < 0.0 {
+            -1.0
+        } else {
+            return None;
+        };
+        let w = w.map(|w| w * turn);
+        if w[0] < 0.0 || w[1] < 0.0 || w[2] < 0.0 || !area.is_finite() {
+            return None;
+        }
+        // On an edge's line: drawn only if the edge, run the way the triangle turns, owns it.
+        for (k, &w) in w.iter().enumerate() {
+            if w == 0.0 {
+                let (a, b) = ((k + 1) % 3, (k + 2) % 3);
+                let (a, b) = ((self.x[a], self.y[a]), (self.x[b], self.y[b]));
+                if !owns(if turn > 0.0 { (a, b) } else { (b, a) }) {
+                    return None;
+                }
+            }
+        }
+        let z = self.z;
+        Some(((w[0] * z[0] + w[1] * z[1] + w[2] * z[2]) / (area * turn)) as f32)
+    }
 }
 
 struct Tile {
@@ -145,6 +230,10 @@ struct Tile {
 /// One view's frame: its camera, colour and depth per pixel, in tiles.
 pub struct Raster {
     pub camera: Camera,
+    /// The camera's map to pixels across, down and depth, as `f32` rows `[x, y, z, 1]·row`.
+    to_screen: [[f32; 4]; 3],
+    /// Half a pixel past the last centre across and down: where [`Raster::cells`] clamps.
+    last_cell: [f32; 2],
     width: usize,
     height: usize,
     tiles_x: usize,
@@ -179,7 +268,7 @@ impl Lighting {
 /// Whether the directed edge `a → b` owns the pixel centres exactly on it: exactly one of
 /// `a → b` and `b → a` does, so two triangles sharing an edge never both draw, nor both skip,
 /// such a pixel.
-fn owns(a: (f64, f64), b: (f64, f64)) -> bool {
+fn owns((a, b): ((f64, f64), (f64, f64))) -> bool {
     let (dx, dy) = (b.0 - a.0, b.1 - a.1);
     dy > 0.0 || (dy == 0.0 && dx > 0.0)
 }
@@ -199,14 +288,6 @@ fn centres(lo: f32, hi: f32, n: usize) -> Option<(u32, u32)> {
     let first = lo as u32 + u32::from(f64::from(lo as u32) < lo);
     let last = hi as u32;
     (first <= last).then_some((first, last + 1))
-}
-
-/// The edge function of `a → b` at `p`, the same bits (negated) for `b → a`.
-fn edge(a: (f64, f64), b: (f64, f64), p: (f64, f64)) -> f64 {
-    let swap = (b.0, b.1) < (a.0, a.1);
-    let (a, b) = if swap { (b, a) } else { (a, b) };
-    let e = (b.0 - a.0) * (p.1 - a.1) - (b.1 - a.1) * (p.0 - a.0);
-    if swap { -e } else { e }
 }
 
 impl Raster {
@@ -243,8 +324,18 @@ impl Raster {
             0.6,
             1.0,
         ));
+        let row = |axis: [f64; 3], scale: f64, offset: f64| {
+            [axis[0] * scale, axis[1] * scale, axis[2] * scale, offset].map(|v| v as f32)
+        };
+        let to_screen = [
+            row(camera.right, camera.scale, camera.origin[0]),
+            row(camera.up, -camera.scale, camera.origin[1]),
+            row(camera.toward, -1.0, 0.0),
+        ];
         Raster {
             camera,
+            to_screen,
+            last_cell: [width as f32 + 0.5, height as f32 + 0.5],
             width,
             height,
             tiles_x,
@@ -256,10 +347,13 @@ impl Raster {
         }
     }
 
-    /// The pixel position and depth of model point `p`, in `f32`: a pure function, so every
+    /// The pixel position and depth of model point `p` ([`Camera::project`], in `f32`,
+    /// which is precise enough for a picture and twice as fast): a pure function, so every
     /// triangle using a vertex gets the same bits for it.
+    #[inline(always)]
     pub fn screen(&self, p: [f32; 3]) -> [f32; 3] {
-        self.camera.project(p.map(f64::from)).map(|v| v as f32)
+        self.to_screen
+            .map(|r| r[0] * p[0] + r[1] * p[1] + r[2] * p[2] + r[3])
     }
 
     /// The cells between pixel centres that screen position `s` lies in, across and down:
@@ -268,16 +362,21 @@ impl Raster {
     /// rows. A triangle whose corners share a cell on either axis covers no pixel centre
     /// ([`Raster::covers`] is `None`): most triangles of a big mesh are seen to be passed over
     /// by comparing numbers worked out once per vertex.
-    #[inline]
+    #[inline(always)]
     pub fn cells(&self, s: [f32; 3]) -> [Option<u32>; 2] {
-        let axis = |v: f32, n: usize| {
-            // Clamped to non-whole bounds, so a point off the panel is never on a line.
-            let v = (f64::from(v) - 0.5).clamp(-0.5, n as f64 - 0.5);
-            let below = floor_i64(v);
-            let on_line = below as f64 == v || v.is_nan();
-            (!on_line).then(|| (below + 1) as u32)
+        let axis = |v: f32, last: f32| {
+            // Cell `i` is where `i < v + 0.5 < i + 1`. Rounding the sum can land on a whole
+            // number, never past one: a wrong cell is never given, at worst none.
+            let w = v + 0.5;
+            // Clamped to non-whole bounds, so a point off the panel is never on a line; NaN
+            // stays NaN (no cell).
+            let w = if w < 0.5 { 0.5 } else { w };
+            let w = if w > last { last } else { w };
+            // Truncation is the floor here (w > 0); a whole w, or NaN, is no cell.
+            let cell = w as u32;
+            ((cell as f32) < w).then_some(cell)
         };
-        [axis(s[0], self.width), axis(s[1], self.height)]
+        [axis(s[0], self.last_cell[0]), axis(s[1], self.last_cell[1])]
     }
 
     /// The pixel columns and rows whose centres the bounding box of a triangle of screen
@@ -298,25 +397,36 @@ impl Raster {
         ))
     }
 
-    /// A triangle ready to draw: screen positions `s` covering `(cols, rows)`
-    /// ([`Raster::covers`]), shaded (when drawn) by the normal of its model corners
-    /// `corners`.
+    /// A triangle ready to draw, of screen positions `s` covering `(cols, rows)`
+    /// ([`Raster::covers`]) and shaded (when drawn) by the normal of its model corners
+    /// `corners`; `None` when its box holds one pixel centre and it does not cover it.
     pub fn flatten(
         &self,
         s: [[f32; 3]; 3],
         (cols, rows): ((u32, u32), (u32, u32)),
         corners: [[f32; 3]; 3],
-    ) -> Flat {
-        let p = corners.map(|c| c.map(f64::from));
-        let n = cross(sub(p[1], p[0]), sub(p[2], p[0]));
-        Flat {
-            x: s.map(|c| c[0]),
-            y: s.map(|c| c[1]),
-            z: s.map(|c| c[2]),
-            normal: n,
+    ) -> Option<Flat> {
+        let (x, y, z) = (s.map(|c| c[0]), s.map(|c| c[1]), s.map(|c| c[2]));
+        let normal = || {
+            let p = corners.map(|c| c.map(f64::from));
+            cross(sub(p[1], p[0]), sub(p[2], p[0]))
+        };
+        if cols.1 - cols.0 == 1 && rows.1 - rows.0 == 1 {
+            let depth = Corners::new(x, y, z).depth_at(cols.0, rows.0)?;
+            return Some(Flat::Dot {
+                at: (cols.0, rows.0),
+                depth,
+                normal: normal(),
+            });
+        }
+        Some(Flat::Spans {
+            x,
+            y,
+            z,
+            normal: normal(),
             cols,
             rows,
-        }
+        })
     }
 
     /// Bins a batch of projected triangles to the tiles, in order, and draws every tile.
@@ -325,8 +435,9 @@ impl Raster {
             tile.list.clear();
         }
         for (i, f) in flats.iter().enumerate() {
-            let (tx0, tx1) = (f.cols.0 as usize / TILE, (f.cols.1 as usize - 1) / TILE);
-            let (ty0, ty1) = (f.rows.0 as usize / TILE, (f.rows.1 as usize - 1) / TILE);
+            let (cols, rows) = f.reach();
+            let (tx0, tx1) = (cols.0 as usize / TILE, (cols.1 as usize - 1) / TILE);
+            let (ty0, ty1) = (rows.0 as usize / TILE, (rows.1 as usize - 1) / TILE);
             for ty in ty0..=ty1 {
                 for tx in tx0..=tx1 {
                     self.tiles[ty * self.tiles_x + tx].list.push(i as u32);
@@ -361,52 +472,43 @@ impl Raster {
 impl Tile {
     /// Draws the part of `f` within this tile.
     fn fill(&mut self, f: &Flat, lighting: &Lighting) {
-        let v = [0, 1, 2].map(|k| (f64::from(f.x[k]), f64::from(f.y[k])));
-        let area = edge(v[0], v[1], v[2]);
-        if area == 0.0 || !area.is_finite() {
-            return;
-        }
-        // Ordered so that the inside is where every edge function is positive.
-        let v = if area > 0.0 { v } else { [v[0], v[2], v[1]] };
-        let z = if area > 0.0 {
-            f.z.map(f64::from)
-        } else {
-            [f.z[0], f.z[2], f.z[1]].map(f64::from)
-        };
-        let area = area.abs();
-        let edges = [(v[1], v[2]), (v[2], v[0]), (v[0], v[1])];
-        let owned = edges.map(|(a, b)| owns(a, b));
-        // Each edge in [`edge`]'s canonical order, worked out once rather than per pixel:
-        // the same products, so the same bits.
-        let canonical = edges.map(|(a, b)| {
-            if (b.0, b.1) < (a.0, a.1) {
-                (b, (a.0 - b.0, a.1 - b.1), -1.0)
-            } else {
-                (a, (b.0 - a.0, b.1 - a.1), 1.0)
-            }
-        });
-        let cols = (
-            (f.cols.0 as usize).max(self.x0),
-            (f.cols.1 as usize).min(self.x0 + self.width),
-        );
-        let rows = (
-            (f.rows.0 as usize).max(self.y0),
-            (f.rows.1 as usize).min(self.y0 + self.height),
-        );
-        let mut rgb = None;
-        for py in rows.0..rows.1 {
-            for px in cols.0..cols.1 {
-                let p = (px as f64 + 0.5, py as f64 + 0.5);
-                let w =
-                    canonical.map(|(a, d, sign)| sign * (d.0 * (p.1 - a.1) - d.1 * (p.0 - a.0)));
-                if (0..3).any(|k| w[k] < 0.0 || (w[k] == 0.0 && !owned[k])) {
-                    continue;
-                }
-                let depth = ((w[0] * z[0] + w[1] * z[1] + w[2] * z[2]) / area) as f32;
-                let at = (py - self.y0) * self.width + (px - self.x0);
+        match *f {
+            Flat::Dot { at, depth, normal } => {
+                let at = (at.1 as usize - self.y0) * self.width + (at.0 as usize - self.x0);
                 if depth < self.depth[at] {
                     self.depth[at] = depth;
-                    self.rgb[at] = *rgb.get_or_insert_with(|| lighting.shade(f.normal));
+                    self.rgb[at] = lighting.shade(normal);
+                }
+            }
+            Flat::Spans {
+                x,
+                y,
+                z,
+                normal,
+                cols,
+                rows,
+            } => {
+                let corners = Corners::new(x, y, z);
+                let cols = (
+                    cols.0.max(self.x0 as u32),
+                    cols.1.min((self.x0 + self.width) as u32),
+                );
+                let rows = (
+                    rows.0.max(self.y0 as u32),
+                    rows.1.min((self.y0 + self.height) as u32),
+                );
+                let mut rgb = None;
+                for py in rows.0..rows.1 {
+                    for px in cols.0..cols.1 {
+                        let Some(depth) = corners.depth_at(px, py) else {
+                            continue;
+                        };
+                        let at = (py as usize - self.y0) * self.width + (px as usize - self.x0);
+                        if depth < self.depth[at] {
+                            self.depth[at] = depth;
+                            self.rgb[at] = *rgb.get_or_insert_with(|| lighting.shade(normal));
+                        }
+                    }
                 }
             }
         }
@@ -483,5 +585,77 @@ mod tests {
         }
         // Both cases were met often.
         assert!(shared > 10_000 && covering > 10_000, "{shared} {covering}");
+    }
+
+    #[test]
+    fn a_triangulated_square_covers_each_centre_inside_exactly_once() {
+        // A 24 × 24-pixel square cut into triangles whose corners sit on pixel centres, on
+        // half-pixels and in between, so many edges run exactly through centres; both turns
+        // (a face seen from the front and from behind) and both diagonals.
+        let n = 48;
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut jitter = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            [0.0, 0.0, 0.25, 0.1, -0.125][(state % 5) as usize]
+        };
+        let corner: Vec<Vec<(f32, f32)>> = (0..=n)
+            .map(|j| {
+                (0..=n)
+                    .map(|i| {
+                        // The square's outline stays straight.
+                        let edge = i == 0 || j == 0 || i == n || j == n;
+                        let (dx, dy) = if edge {
+                            (0.0, 0.0)
+                        } else {
+                            (jitter(), jitter())
+                        };
+                        (4.0 + i as f32 * 0.5 + dx, 4.0 + j as f32 * 0.5 + dy)
+                    })
+                    .collect()
+            })
+            .collect();
+        for backwards in [false, true] {
+            let mut claims = vec![0u32; 40 * 40];
+            for j in 0..n {
+                for i in 0..n {
+                    let (a, b, c, d) = (
+                        corner[j][i],
+                        corner[j][i + 1],
+                        corner[j + 1][i + 1],
+                        corner[j + 1][i],
+                    );
+                    let halves = if (i + j) % 2 == 0 {
+                        [[a, b, c], [a, c, d]]
+                    } else {
+                        [[a, b, d], [b, c, d]]
+                    };
+                    for mut t in halves {
+                        if backwards {
+                            t.swap(1, 2);
+                        }
+                        let corners = Corners::new(t.map(|p| p.0), t.map(|p| p.1), [1.0; 3]);
+                        for py in 0..40 {
+                            for px in 0..40 {
+                                if let Some(depth) = corners.depth_at(px, py) {
+                                    assert_eq!(depth, 1.0);
+                                    claims[(py * 40 + px) as usize] += 1;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            // Centres strictly inside the square (4, 28)²: 4.5 … 27.5.
+            for py in 0..40 {
+                for px in 0..40 {
+                    let inside = (4..28).contains(&px) && (4..28).contains(&py);
+                    let expected = u32::from(inside);
+                    let got = claims[py * 40 + px];
+                    assert_eq!(got, expected, "pixel ({px}, {py}), backwards {backwards}");
+                }
+            }
+        }
     }
 }
