@@ -51,6 +51,42 @@ fn vertex_key(view: &Raster, z0: f64, p: [f32; 3]) -> u32 {
     pass_key(view.cells(view.screen(p)), f64::from(p[2]) >= z0)
 }
 
+/// The [`vertex_key`]s of `points` into `keys`, the same numbers. The points are read into
+/// arrays of each coordinate first, a block at a time, so that the arithmetic is done for
+/// several points at once (four per instruction on the baseline x86-64 target).
+fn key_run(view: &Raster, z0: f64, points: &[[f32; 3]], keys: &mut [u32]) {
+    const BLOCK: usize = 64;
+    let above = Above::new(z0);
+    for (points, keys) in points.chunks(BLOCK).zip(keys.chunks_mut(BLOCK)) {
+        let mut xyz = [[0.0f32; BLOCK]; 3];
+        for (i, p) in points.iter().enumerate() {
+            for a in 0..3 {
+                xyz[a][i] = p[a];
+            }
+        }
+        for (i, key) in keys.iter_mut().enumerate().take(points.len()) {
+            let p = [xyz[0][i], xyz[1][i], xyz[2][i]];
+            *key = pass_key(view.cells(view.screen(p)), above.of(p[2]));
+        }
+    }
+}
+
+/// `f64::from(z) >= z0` for an `f32` height `z`, as one `f32` comparison: with the least
+/// `f32` at or above `z0`, the two agree for every `z` (NaN, no plane, is below nothing).
+struct Above(f32);
+
+impl Above {
+    fn new(z0: f64) -> Above {
+        let t = z0 as f32;
+        Above(if f64::from(t) < z0 { t.next_up() } else { t })
+    }
+
+    #[inline(always)]
+    fn of(&self, z: f32) -> bool {
+        z >= self.0
+    }
+}
+
 /// Whether a triangle of corners with these [`pass_key`]s may be passed over.
 #[inline(always)]
 fn passed_over(a: u32, b: u32, c: u32) -> bool {
@@ -103,11 +139,7 @@ impl Keys {
         self.own
             .par_chunks_mut(RUN)
             .zip(own.par_chunks(RUN))
-            .for_each(|(keys, points)| {
-                for (key, &p) in keys.iter_mut().zip(points) {
-                    *key = vertex_key(view, z0, p);
-                }
-            });
+            .for_each(|(keys, points)| key_run(view, z0, points, keys));
         Keyed {
             first,
             own,
@@ -234,6 +266,49 @@ mod tests {
         }
         // Most such triangles are passed over, not only a few.
         assert!(passed > rounds / 3, "{passed} of {rounds}");
+    }
+
+    #[test]
+    fn keys_made_a_block_at_a_time_are_each_points_key() {
+        let (size, bbox) = ((64, 48), [[0.0; 3], [1.0; 3]]);
+        let camera = Camera::fit([1.0, -1.0, 1.0], [0.0, 0.0, 1.0], bbox, size, 0.9);
+        let view = Raster::new(camera, size, [0; 3]);
+        let z0 = 0.3f64;
+        let just_below = (z0 as f32).next_down();
+        let special = [
+            0.3,
+            z0 as f32,
+            just_below,
+            0.0,
+            -0.0,
+            1e30,
+            -1e30,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        let mut state = 0x853c_49e6_748f_ea9bu64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let points: Vec<[f32; 3]> = (0..5000)
+            .map(|_| {
+                std::array::from_fn(|_| match next() % 4 {
+                    0 => special[(next() % special.len() as u64) as usize],
+                    _ => (next() % 10_000) as f32 / 8000.0 - 0.1,
+                })
+            })
+            .collect();
+        for z0 in [z0, f64::NAN, 1e300, -1e300] {
+            let mut keys = vec![0; points.len()];
+            key_run(&view, z0, &points, &mut keys);
+            for (p, key) in points.iter().zip(keys) {
+                assert_eq!(key, vertex_key(&view, z0, *p), "{p:?} at z0 = {z0}");
+            }
+        }
     }
 
     #[test]

@@ -383,6 +383,7 @@ impl Raster {
     /// positions `s` holds; `None` when it covers no pixel centre. Most triangles of a big
     /// mesh are smaller than a pixel and cover none, so that is decided first, from the
     /// projected corners alone.
+    #[inline]
     pub fn covers(&self, s: [[f32; 3]; 3]) -> Option<((u32, u32), (u32, u32))> {
         let (mut lo, mut hi) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
         for c in &s {
@@ -400,6 +401,7 @@ impl Raster {
     /// A triangle ready to draw, of screen positions `s` covering `(cols, rows)`
     /// ([`Raster::covers`]) and shaded (when drawn) by the normal of its model corners
     /// `corners`; `None` when its box holds one pixel centre and it does not cover it.
+    #[inline]
     pub fn flatten(
         &self,
         s: [[f32; 3]; 3],
