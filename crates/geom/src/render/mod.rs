@@ -191,9 +191,9 @@ impl Preview {
             let runs = firsts
                 .into_par_iter()
                 .map(|first| {
-                    let (mut flats, mut cuts) = (Vec::new(), Vec::new());
                     let last = (first + RUN).min(end);
                     let (looked_at, count) = vertices.look_at(&triangles[first..last]);
+                    let (mut flats, mut cuts) = (Vec::with_capacity(count), Vec::new());
                     for &k in &looked_at[..count] {
                         let i = first + k as usize;
                         let t = triangles[i];
