@@ -1,8 +1,8 @@
 //! `f64::floor` as an integer without libm.
 //!
 //! On the baseline x86-64 target (no SSE4.1 rounding instruction) `floor` is a library call;
-//! per corner of tens of millions of triangles it was a tenth of a preview and of the page's
-//! decimation. Truncation toward zero is one instruction, and a comparison corrects it.
+//! per corner of tens of millions of triangles it was a tenth of the page's decimation
+//! (`watch --serve`). Truncation toward zero is one instruction, and a comparison corrects it.
 
 /// `v.floor() as i64`, for every input: NaN gives 0 and values beyond `i64`'s range saturate,
 /// as the cast does.

@@ -347,8 +347,8 @@ impl Raster {
         }
     }
 
-    /// The pixel position and depth of model point `p` ([`Camera::project`], in `f32`,
-    /// which is precise enough for a picture and twice as fast): a pure function, so every
+    /// The pixel position and depth of model point `p` ([`Camera::project`], worked out in
+    /// `f32`, precise enough for a picture and cheaper per vertex): a pure function, so every
     /// triangle using a vertex gets the same bits for it.
     #[inline(always)]
     pub fn screen(&self, p: [f32; 3]) -> [f32; 3] {
