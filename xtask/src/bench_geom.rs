@@ -1,4 +1,4 @@
-//! `cargo xtask bench geom [expr|mesh-io|periodic|scaffold|symmetric|auto-mesh|validate|constrain|measure|preview]…`:
+//! `cargo xtask bench geom [expr|mesh-io|periodic|scaffold|symmetric|auto-mesh|validate|constrain|measure|preview|preview-tiling]…`:
 //! timings of the geometry crate's kernels, printed with their targets (what used to be the
 //! `#[ignore]`d `*_timing` tests of `crates/geom/tests`). No names: all of them.
 //!
@@ -26,6 +26,7 @@ const ALL: &[(&str, Bench)] = &[
     ("constrain", constrain),
     ("measure", measure),
     ("preview", preview),
+    ("preview-tiling", preview_tiling),
 ];
 
 pub fn run(args: &[String]) -> Result<(), String> {
@@ -620,5 +621,95 @@ fn preview() -> Result<(), String> {
     println!("best: {best:.3} s ({per_million:.3} s per million triangles)");
     ensure(per_million <= 2.0, || {
         format!("preview far slower than expected: {per_million:.3} s per million triangles")
+    })
+}
+
+/// A tiling's preview as the build draws it, on one thread from its chunks: Schwarz P tiled
+/// at resolution 12 into the 100k-tet bracket (`SCAFFOLD_100K`, skipped when absent), 33 M
+/// triangles in 500 k-triangle chunks. The build draws this beside the tiling, so its time is
+/// what a preview adds to a big tiling's build (about half of it on 2 cores).
+fn preview_tiling() -> Result<(), String> {
+    use latticebuild_geom::field::{ScalarField, Solid};
+    use latticebuild_geom::mesh::{MeshChunk, SpareArrays};
+    use latticebuild_geom::render::{Preview, Spec};
+    use latticebuild_geom::scaffold::read_scaffold;
+    use latticebuild_geom::tile::{TiledSolid, chunk_elements_for, stream_scaffold};
+
+    struct SchwarzP;
+    impl ScalarField for SchwarzP {
+        fn eval_points(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
+            let tau = std::f64::consts::TAU;
+            for (i, v) in out.iter_mut().enumerate() {
+                *v = (tau * xs[i]).cos() + (tau * ys[i]).cos() + (tau * zs[i]).cos() - 0.3;
+            }
+        }
+    }
+
+    let path = std::env::var("SCAFFOLD_100K")
+        .unwrap_or_else(|_| "/work/shared/data/scaffolds/bracket_tet4_100k_msh41bin.msh".into());
+    let Ok(bytes) = std::fs::read(&path) else {
+        println!("{path} not found: skipped (set SCAFFOLD_100K)");
+        return Ok(());
+    };
+    let scaffold =
+        read_scaffold(&bytes, "bracket_100k.msh", Some("msh")).map_err(|e| format!("{e:?}"))?;
+    let solid = TiledSolid::of(&SchwarzP, Solid::Inside { offset: 0.0 });
+    let mut chunks: Vec<MeshChunk> = Vec::new();
+    stream_scaffold(
+        &scaffold,
+        &solid,
+        None,
+        12,
+        chunk_elements_for(12, 500_000),
+        &SpareArrays::default(),
+        &mut |chunk| {
+            chunks.push(chunk);
+            Ok(())
+        },
+    )
+    .map_err(|e| format!("{e:?}"))?;
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for node in &scaffold.nodes {
+        for a in 0..3 {
+            lo[a] = lo[a].min(node[a]);
+            hi[a] = hi[a].max(node[a]);
+        }
+    }
+    let spec = Spec {
+        size: (1024, 768),
+        bbox: [lo, hi],
+        cut: Some((lo[2] + hi[2]) / 2.0),
+    };
+    let triangles: usize = chunks.iter().map(|c| c.triangles.len()).sum();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .map_err(|e| e.to_string())?;
+    let mut best = f64::INFINITY;
+    for _ in 0..3 {
+        let start = Instant::now();
+        let mut preview = Preview::new(spec.clone());
+        pool.install(|| chunks.iter().try_for_each(|chunk| preview.add_chunk(chunk)))
+            .map_err(|i| format!("triangle {i} of a chunk out of range"))?;
+        let layout = preview.layout();
+        let image = preview.finish(&[]);
+        let seconds = start.elapsed().as_secs_f64();
+        best = best.min(seconds);
+        // The view panel's pixels that are not its background (the top-left corner's).
+        let (x0, width) = layout.view;
+        let drawn = (0..layout.panel_height)
+            .flat_map(|y| (x0..x0 + width).map(move |x| (x, y)))
+            .filter(|&(x, y)| image.get(x, y) != image.get(0, 0))
+            .count();
+        println!(
+            "{triangles} triangles in {} chunks, one thread: {seconds:.3} s ({:.1} ns per triangle, {drawn} pixels drawn)",
+            chunks.len(),
+            seconds * 1e9 / triangles as f64
+        );
+        ensure(drawn > 50_000, || format!("only {drawn} pixels drawn"))?;
+    }
+    println!("best: {best:.3} s");
+    ensure(best / (triangles as f64 / 1e6) <= 0.1, || {
+        format!("tiling preview far slower than expected: {best:.3} s")
     })
 }
