@@ -410,5 +410,16 @@ impl Image {
     }
 }
 
+/// A xorshift generator for the tests' random cases: the same numbers on every run.
+#[cfg(test)]
+fn xorshift(mut state: u64) -> impl FnMut() -> u64 {
+    move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    }
+}
+
 #[cfg(test)]
 mod tests;

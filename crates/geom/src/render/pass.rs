@@ -229,6 +229,7 @@ impl std::hash::Hasher for IdHash {
 mod tests {
     use super::*;
     use crate::render::raster::Camera;
+    use crate::render::xorshift;
 
     #[test]
     fn a_triangle_passed_over_covers_no_centre_and_meets_no_plane() {
@@ -236,13 +237,8 @@ mod tests {
         let camera = Camera::fit([1.0, -1.0, 1.0], [0.0, 0.0, 1.0], bbox, size, 0.9);
         let view = Raster::new(camera, size, [0; 3]);
         let z0 = 0.5;
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut unit = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f32 / (1u64 << 53) as f32
-        };
+        let mut random = xorshift(0x2545_f491_4f6c_dd1d);
+        let mut unit = || (random() >> 11) as f32 / (1u64 << 53) as f32;
         let (mut passed, rounds) = (0, 200_000);
         for round in 0..rounds {
             // Corners a fraction of a pixel apart (a pixel is ~1/100 of the box here), some
@@ -287,13 +283,7 @@ mod tests {
             f32::NEG_INFINITY,
             f32::NAN,
         ];
-        let mut state = 0x853c_49e6_748f_ea9bu64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut next = xorshift(0x853c_49e6_748f_ea9b);
         let points: Vec<[f32; 3]> = (0..5000)
             .map(|_| {
                 std::array::from_fn(|_| match next() % 4 {

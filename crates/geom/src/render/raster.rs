@@ -108,16 +108,6 @@ impl Camera {
             ],
         }
     }
-
-    /// The pixel position and depth of `p`.
-    #[inline]
-    pub fn project(&self, p: [f64; 3]) -> [f64; 3] {
-        [
-            self.origin[0] + dot(p, self.right) * self.scale,
-            self.origin[1] - dot(p, self.up) * self.scale,
-            -dot(p, self.toward),
-        ]
-    }
 }
 
 /// A triangle ready to draw. Most triangles of a big mesh are smaller than a pixel: one
@@ -347,9 +337,10 @@ impl Raster {
         }
     }
 
-    /// The pixel position and depth of model point `p` ([`Camera::project`], worked out in
-    /// `f32`, precise enough for a picture and cheaper per vertex): a pure function, so every
-    /// triangle using a vertex gets the same bits for it.
+    /// The pixel position (`origin + p·right·scale` across, `origin − p·up·scale` down) and
+    /// depth (`−p·toward`) of model point `p`, worked out in `f32`, precise enough for a
+    /// picture and cheaper per vertex: a pure function, so every triangle using a vertex gets
+    /// the same bits for it.
     #[inline(always)]
     pub fn screen(&self, p: [f32; 3]) -> [f32; 3] {
         self.to_screen
@@ -520,6 +511,7 @@ impl Tile {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::xorshift;
 
     #[test]
     fn a_triangle_within_one_cell_covers_no_pixel_centre() {
@@ -545,13 +537,8 @@ mod tests {
             0.5001,
             0.4999,
         ]);
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut pick = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            values[(state % values.len() as u64) as usize]
-        };
+        let mut random = xorshift(0x2545_f491_4f6c_dd1d);
+        let mut pick = || values[(random() % values.len() as u64) as usize];
         let (mut shared, mut covering) = (0, 0);
         for round in 0..300_000 {
             // Corners near one another (most share a cell) or anywhere.
@@ -595,13 +582,8 @@ mod tests {
         // half-pixels and in between, so many edges run exactly through centres; both turns
         // (a face seen from the front and from behind) and both diagonals.
         let n = 48;
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut jitter = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            [0.0, 0.0, 0.25, 0.1, -0.125][(state % 5) as usize]
-        };
+        let mut random = xorshift(0x9e37_79b9_7f4a_7c15);
+        let mut jitter = || [0.0, 0.0, 0.25, 0.1, -0.125][(random() % 5) as usize];
         let corner: Vec<Vec<(f32, f32)>> = (0..=n)
             .map(|j| {
                 (0..=n)
