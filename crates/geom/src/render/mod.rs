@@ -26,7 +26,7 @@ use crate::mesh::{Mesh, MeshChunk};
 use rayon::prelude::*;
 
 use pass::Keyed;
-use raster::{Camera, Flat, Raster, Rgb};
+use raster::{Bins, Camera, Flat, Raster, Rgb};
 use section::{Section, Segment};
 
 const BACKGROUND: Rgb = [250, 250, 250];
@@ -51,7 +51,20 @@ const RUN: usize = pass::RUN;
 #[derive(Default)]
 struct Scratch {
     keys: pass::Keys,
+    /// One per run of a batch.
+    runs: Vec<Run>,
+}
+
+/// What one run of triangles adds: its triangles ready to draw, grouped by tile, and its
+/// cuts by the section's plane.
+#[derive(Default)]
+struct Run {
+    /// In the run's order, before grouping.
     flats: Vec<Flat>,
+    bins: Bins,
+    cuts: Vec<Segment>,
+    /// The first triangle with a corner the chunk does not have.
+    bad: Option<usize>,
 }
 
 /// One line of the caption.
@@ -181,49 +194,56 @@ impl Preview {
         &mut self,
         triangles: &[[u32; 3]],
         vertices: &Keyed,
-        flats: &mut Vec<Flat>,
+        runs: &mut Vec<Run>,
     ) -> Result<(), usize> {
         let mut start = 0;
         while start < triangles.len() {
             let end = (start + BATCH).min(triangles.len());
             let (view, section) = (&self.view, self.section.as_ref());
-            let firsts: Vec<usize> = (start..end).step_by(RUN).collect();
-            let runs = firsts
-                .into_par_iter()
-                .map(|first| {
-                    let last = (first + RUN).min(end);
-                    let (looked_at, count) = vertices.look_at(&triangles[first..last]);
-                    let (mut flats, mut cuts) = (Vec::with_capacity(count), Vec::new());
-                    for &k in &looked_at[..count] {
-                        let i = first + k as usize;
-                        let t = triangles[i];
-                        let (Some(a), Some(b), Some(c)) = (
-                            vertices.model(t[0]),
-                            vertices.model(t[1]),
-                            vertices.model(t[2]),
-                        ) else {
-                            return Err(i);
-                        };
-                        // Projected again (the same bits as for its key).
-                        let model = [a, b, c];
-                        let screen = model.map(|p| view.screen(p));
-                        if let Some(cover) = view.covers(screen) {
-                            flats.extend(view.flatten(screen, cover, model));
-                        }
-                        if let Some(s) = section
-                            && s.meets([model[0][2], model[1][2], model[2][2]])
-                        {
-                            cuts.extend(s.segment(model));
-                        }
+            let count = (end - start).div_ceil(RUN);
+            if runs.len() < count {
+                runs.resize_with(count, Run::default);
+            }
+            let runs = &mut runs[..count];
+            runs.par_iter_mut().enumerate().for_each(|(r, run)| {
+                let first = start + r * RUN;
+                let last = (first + RUN).min(end);
+                let (looked_at, count) = vertices.look_at(&triangles[first..last]);
+                run.flats.clear();
+                run.cuts.clear();
+                run.bad = None;
+                for &k in &looked_at[..count] {
+                    let i = first + k as usize;
+                    let t = triangles[i];
+                    let (Some(a), Some(b), Some(c)) = (
+                        vertices.model(t[0]),
+                        vertices.model(t[1]),
+                        vertices.model(t[2]),
+                    ) else {
+                        run.bad = Some(i);
+                        return;
+                    };
+                    // Projected again (the same bits as for its key).
+                    let model = [a, b, c];
+                    let screen = model.map(|p| view.screen(p));
+                    if let Some(cover) = view.covers(screen) {
+                        run.flats.extend(view.flatten(screen, cover, model));
                     }
-                    Ok((flats, cuts))
-                })
-                .collect::<Result<Vec<(Vec<Flat>, Vec<Segment>)>, usize>>()?;
-            flats.clear();
-            flats.extend(runs.iter().flat_map(|r| r.0.iter().copied()));
-            self.view.draw(flats);
+                    if let Some(s) = section
+                        && s.meets([model[0][2], model[1][2], model[2][2]])
+                    {
+                        run.cuts.extend(s.segment(model));
+                    }
+                }
+                view.bin(&run.flats, &mut run.bins);
+            });
+            if let Some(bad) = runs.iter().find_map(|r| r.bad) {
+                return Err(bad);
+            }
+            let bins: Vec<&Bins> = runs.iter().map(|r| &r.bins).collect();
+            self.view.draw(&bins);
             if let Some(section) = &mut self.section {
-                for cut in runs.iter().flat_map(|r| r.1.iter()) {
+                for cut in runs.iter().flat_map(|r| r.cuts.iter()) {
                     section.cross(*cut);
                 }
             }
@@ -245,7 +265,7 @@ impl Preview {
         let mut scratch = std::mem::take(&mut self.scratch);
         let z0 = self.section.as_ref().map(|s| s.z0);
         let vertices = scratch.keys.key(&self.view, z0, first, own, borrowed);
-        let added = self.add(triangles, &vertices, &mut scratch.flats);
+        let added = self.add(triangles, &vertices, &mut scratch.runs);
         self.scratch = scratch;
         added
     }

@@ -1,12 +1,12 @@
 //! A z-buffered rasteriser of flat-shaded triangles, in fixed tiles, for one orthographic view.
 //!
 //! Invariants:
-//! - Deterministic for any thread count: triangles come in batches, in order, each projected
-//!   by pure functions ([`Raster::screen`], [`Raster::covers`], [`Raster::flatten`], run in
-//!   parallel by the caller); a batch is binned to tiles in triangle order, and each tile
-//!   draws its triangles in that order, keeping a fragment only when it is strictly nearer
-//!   (the first triangle wins a tie). So a pixel's colour depends only on the sequence of
-//!   triangles, never on which thread drew which tile.
+//! - Deterministic for any thread count: triangles come in runs, in order, each projected,
+//!   shaded and grouped by tile by pure functions ([`Raster::screen`], [`Raster::covers`],
+//!   [`Raster::flatten`], [`Raster::bin`], run in parallel by the caller); each tile draws
+//!   its group of each run, run after run, each in triangle order, keeping a fragment only
+//!   when it is strictly nearer (the first triangle wins a tie). So a pixel's colour depends
+//!   only on the sequence of triangles, never on which thread drew which tile.
 //! - Watertight: a pixel centre on an edge shared by two triangles is drawn by exactly one of
 //!   them. The edge function at a centre `p` is `(a − p) × (b − p)`, whose bits for `b → a`
 //!   are exactly the negated bits for `a → b`, so both triangles see the same value, and an
@@ -25,7 +25,7 @@
 
 use rayon::prelude::*;
 
-use crate::vec3::{cross, dot, sub};
+use crate::vec3::{cross, dot};
 
 /// Tile edge in pixels.
 const TILE: usize = 64;
@@ -33,8 +33,8 @@ const TILE: usize = 64;
 pub type Rgb = [u8; 3];
 
 /// A face's colour seen from outside, and from inside (the tint).
-pub const FRONT: [f64; 3] = [0.80, 0.82, 0.88];
-pub const BACK: [f64; 3] = [0.90, 0.16, 0.12];
+pub const FRONT: [f32; 3] = [0.80, 0.82, 0.88];
+pub const BACK: [f32; 3] = [0.90, 0.16, 0.12];
 
 fn normalize(a: [f64; 3]) -> [f64; 3] {
     let n = dot(a, a).sqrt();
@@ -110,20 +110,19 @@ impl Camera {
     }
 }
 
-/// A triangle ready to draw. Most triangles of a big mesh are smaller than a pixel: one
-/// whose box holds a single pixel centre is tested against it when it is made, and kept (as a
-/// [`Flat::Dot`]) only if it covers it. It is shaded only when it wins a pixel: most lie
-/// behind others.
+/// A triangle ready to draw, shaded. Most triangles of a big mesh are smaller than a pixel:
+/// one whose box holds a single pixel centre is tested against it when it is made, and kept
+/// (as a [`Flat::Dot`]) only if it covers it.
 #[derive(Clone, Copy)]
 pub enum Flat {
     /// Corners in pixels (f32, so a shared corner is the same bits in every triangle using
-    /// it), depths, the outward normal (unnormalised), and the pixel columns `x0..x1` and
-    /// rows `y0..y1` whose centres its box holds.
+    /// it), depths, the colour, and the pixel columns `x0..x1` and rows `y0..y1` whose
+    /// centres its box holds.
     Spans {
         x: [f32; 3],
         y: [f32; 3],
         z: [f32; 3],
-        normal: [f64; 3],
+        rgb: Rgb,
         cols: (u32, u32),
         rows: (u32, u32),
     },
@@ -131,7 +130,7 @@ pub enum Flat {
     Dot {
         at: (u32, u32),
         depth: f32,
-        normal: [f64; 3],
+        rgb: Rgb,
     },
 }
 
@@ -146,24 +145,40 @@ impl Flat {
 }
 
 /// A triangle's corners in pixels, tested against pixel centres: it covers a centre `p`
-/// where its three edge functions there, `(a − p) × (b − p)` for each edge `a → b`, have one
-/// sign, or are zero on an edge that owns its line ([`owns`]). Two triangles sharing an edge
-/// compute the same bits for it, negated: the products are the same, and a difference
-/// negates exactly. So a centre on a shared edge is drawn by exactly one of them.
+/// where its three edge functions there, `(a − p) × (b − p)` for each edge `a → b`, have the
+/// sign of its area, or are zero on an edge that owns its line ([`owns`]), run the way the
+/// triangle turns. Two triangles sharing an edge compute the same bits for it, negated: the
+/// products are the same, and a difference negates exactly. So a centre on a shared edge is
+/// drawn by exactly one of them.
 struct Corners {
     x: [f64; 3],
     y: [f64; 3],
     z: [f64; 3],
+    /// The sign of the area: `1` when it turns counter-clockwise on screen, else `−1`.
+    turn: f64,
+    /// Twice the area, positive.
+    area: f64,
 }
 
 impl Corners {
+    /// `None` for a triangle that covers no centre: of zero area, or with a corner not
+    /// finite.
     #[inline]
-    fn new(x: [f32; 3], y: [f32; 3], z: [f32; 3]) -> Corners {
-        Corners {
-            x: x.map(f64::from),
-            y: y.map(f64::from),
-            z: z.map(f64::from),
+    fn new(x: [f32; 3], y: [f32; 3], z: [f32; 3]) -> Option<Corners> {
+        let (x, y, z) = (x.map(f64::from), y.map(f64::from), z.map(f64::from));
+        let area = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]);
+        if area == 0.0 || !area.is_finite() {
+            return None;
         }
+        // A selection, not a branch: which way a triangle turns is random.
+        let turn = if area > 0.0 { 1.0 } else { -1.0 };
+        Some(Corners {
+            x,
+            y,
+            z,
+            turn,
+            area: area * turn,
+        })
     }
 
     /// The depth at the centre of pixel `(px, py)`, if the triangle covers it.
@@ -177,32 +192,25 @@ impl Corners {
             rx[1] * ry[2] - ry[1] * rx[2],
             rx[2] * ry[0] - ry[2] * rx[0],
             rx[0] * ry[1] - ry[0] * rx[1],
-        ];
-        // Twice the area, signed by the triangle's turn on screen (NaN for a bad corner).
-        let area = w[0] + w[1] + w[2];
-        let turn = if area > 0.0 {
-            1.0
-        } else if area < 0.0 {
-            -1.0
-        } else {
-            return None;
-        };
-        let w = w.map(|w| w * turn);
-        if w[0] < 0.0 || w[1] < 0.0 || w[2] < 0.0 || !area.is_finite() {
+        ]
+        .map(|w| w * self.turn);
+        // Bitwise, not `||`: which way each goes is random.
+        if (w[0] < 0.0) | (w[1] < 0.0) | (w[2] < 0.0) {
             return None;
         }
-        // On an edge's line: drawn only if the edge, run the way the triangle turns, owns it.
+        // On an edge's line (rare): drawn only if the edge, run the way the triangle turns,
+        // owns it.
         for (k, &w) in w.iter().enumerate() {
             if w == 0.0 {
                 let (a, b) = ((k + 1) % 3, (k + 2) % 3);
                 let (a, b) = ((self.x[a], self.y[a]), (self.x[b], self.y[b]));
-                if !owns(if turn > 0.0 { (a, b) } else { (b, a) }) {
+                if !owns(if self.turn > 0.0 { (a, b) } else { (b, a) }) {
                     return None;
                 }
             }
         }
         let z = self.z;
-        Some(((w[0] * z[0] + w[1] * z[1] + w[2] * z[2]) / (area * turn)) as f32)
+        Some(((w[0] * z[0] + w[1] * z[1] + w[2] * z[2]) / self.area) as f32)
     }
 }
 
@@ -213,9 +221,25 @@ struct Tile {
     height: usize,
     depth: Vec<f32>,
     rgb: Vec<Rgb>,
-    /// Indices into the current batch, in triangle order.
-    list: Vec<u32>,
 }
+
+/// A run of triangles ready to draw, grouped by tile ([`Raster::bin`]); kept from one run to
+/// the next, so its arrays are allocated once.
+#[derive(Default)]
+pub struct Bins {
+    /// Tile `t`'s group is `flats[starts[t]..starts[t + 1]]`.
+    flats: Vec<Flat>,
+    starts: Vec<u32>,
+    /// Where the next triangle of each tile goes, while binning.
+    next: Vec<u32>,
+}
+
+/// What fills [`Bins::flats`] before each place is written.
+const PLACEHOLDER: Flat = Flat::Dot {
+    at: (0, 0),
+    depth: f32::INFINITY,
+    rgb: [0; 3],
+};
 
 /// One view's frame: its camera, colour and depth per pixel, in tiles.
 pub struct Raster {
@@ -235,23 +259,28 @@ pub struct Raster {
 /// tells a face seen from behind).
 #[derive(Clone, Copy)]
 struct Lighting {
-    toward: [f64; 3],
-    lights: [[f64; 3]; 2],
+    toward: [f32; 3],
+    lights: [[f32; 3]; 2],
 }
 
 impl Lighting {
-    /// The colour of a face of (unnormalised) outward normal `n`.
-    fn shade(&self, n: [f64; 3]) -> Rgb {
-        let n = normalize(n);
+    /// The colour of a face of (unnormalised) outward normal `n`. In `f32` and without
+    /// branches: it runs for every triangle drawn, and which way a face turns is random.
+    #[inline]
+    fn shade(&self, n: [f32; 3]) -> Rgb {
+        let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let length = dot(n, n).sqrt();
         let front = dot(n, self.toward) >= 0.0;
-        let (n, base) = if front {
-            (n, FRONT)
-        } else {
-            ([-n[0], -n[1], -n[2]], BACK)
-        };
-        let light =
-            0.22 + 0.68 * dot(n, self.lights[0]).max(0.0) + 0.30 * dot(n, self.lights[1]).max(0.0);
-        base.map(|c| (255.0 * (c * light).clamp(0.0, 1.0)).round() as u8)
+        // A face seen from behind is lit as if turned toward the viewer. A zero normal
+        // (a degenerate face) gets the ambient light only.
+        let scale = if length > 0.0 { 1.0 / length } else { 0.0 };
+        let scale = if front { scale } else { -scale };
+        let lit = |light: [f32; 3]| (dot(n, light) * scale).max(0.0);
+        let light = 0.22 + 0.68 * lit(self.lights[0]) + 0.30 * lit(self.lights[1]);
+        let base = if front { FRONT } else { BACK };
+        // `+ 0.5` then truncation rounds a non-negative value, without `round` (a library
+        // call on the baseline x86-64 target).
+        base.map(|c| (255.0 * (c * light).clamp(0.0, 1.0) + 0.5) as u8)
     }
 }
 
@@ -297,7 +326,6 @@ impl Raster {
                     height: h,
                     depth: vec![f32::INFINITY; w * h],
                     rgb: vec![background; w * h],
-                    list: Vec::new(),
                 });
             }
         }
@@ -331,8 +359,8 @@ impl Raster {
             tiles_x,
             tiles,
             lighting: Lighting {
-                toward: camera.toward,
-                lights: [key, fill],
+                toward: camera.toward.map(|v| v as f32),
+                lights: [key, fill].map(|l| l.map(|v| v as f32)),
             },
         }
     }
@@ -400,52 +428,91 @@ impl Raster {
         corners: [[f32; 3]; 3],
     ) -> Option<Flat> {
         let (x, y, z) = (s.map(|c| c[0]), s.map(|c| c[1]), s.map(|c| c[2]));
-        let normal = || {
-            let p = corners.map(|c| c.map(f64::from));
-            cross(sub(p[1], p[0]), sub(p[2], p[0]))
+        let rgb = || {
+            let [a, b, c] = corners;
+            let (u, v) = (
+                [0, 1, 2].map(|k| b[k] - a[k]),
+                [0, 1, 2].map(|k| c[k] - a[k]),
+            );
+            let normal = [
+                u[1] * v[2] - u[2] * v[1],
+                u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0],
+            ];
+            self.lighting.shade(normal)
         };
         if cols.1 - cols.0 == 1 && rows.1 - rows.0 == 1 {
-            let depth = Corners::new(x, y, z).depth_at(cols.0, rows.0)?;
+            let depth = Corners::new(x, y, z)?.depth_at(cols.0, rows.0)?;
             return Some(Flat::Dot {
                 at: (cols.0, rows.0),
                 depth,
-                normal: normal(),
+                rgb: rgb(),
             });
         }
         Some(Flat::Spans {
             x,
             y,
             z,
-            normal: normal(),
+            rgb: rgb(),
             cols,
             rows,
         })
     }
 
-    /// Bins a batch of projected triangles to the tiles, in order, and draws every tile.
-    pub fn draw(&mut self, flats: &[Flat]) {
-        for tile in &mut self.tiles {
-            tile.list.clear();
-        }
-        for (i, f) in flats.iter().enumerate() {
-            let (cols, rows) = f.reach();
-            let (tx0, tx1) = (cols.0 as usize / TILE, (cols.1 as usize - 1) / TILE);
-            let (ty0, ty1) = (rows.0 as usize / TILE, (rows.1 as usize - 1) / TILE);
-            for ty in ty0..=ty1 {
-                for tx in tx0..=tx1 {
-                    self.tiles[ty * self.tiles_x + tx].list.push(i as u32);
+    /// The tiles `f` reaches, as a range of tile columns and one of tile rows.
+    fn tiles_of(&self, f: &Flat) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
+        let (cols, rows) = f.reach();
+        let across = cols.0 as usize / TILE..(cols.1 as usize - 1) / TILE + 1;
+        let down = rows.0 as usize / TILE..(rows.1 as usize - 1) / TILE + 1;
+        (across, down)
+    }
+
+    /// Groups `flats` (a run of triangles, in order) by the tiles they reach into `bins`,
+    /// each group in the run's order; a triangle reaching several tiles is in each of their
+    /// groups. A pure function, run on each run in parallel by the caller: each tile then
+    /// reads its triangles one after the other in memory.
+    pub fn bin(&self, flats: &[Flat], bins: &mut Bins) {
+        let tiles = self.tiles.len();
+        bins.starts.clear();
+        bins.starts.resize(tiles + 1, 0);
+        for f in flats {
+            let (across, down) = self.tiles_of(f);
+            for ty in down {
+                for tx in across.clone() {
+                    bins.starts[ty * self.tiles_x + tx + 1] += 1;
                 }
             }
         }
-        let lighting = &self.lighting;
-        self.tiles
-            .par_iter_mut()
-            .filter(|t| !t.list.is_empty())
-            .for_each(|tile| {
-                for k in 0..tile.list.len() {
-                    tile.fill(&flats[tile.list[k] as usize], lighting);
+        for t in 0..tiles {
+            bins.starts[t + 1] += bins.starts[t];
+        }
+        bins.next.clear();
+        bins.next.extend_from_slice(&bins.starts[..tiles]);
+        bins.flats.clear();
+        bins.flats.resize(bins.starts[tiles] as usize, PLACEHOLDER);
+        for f in flats {
+            let (across, down) = self.tiles_of(f);
+            for ty in down {
+                for tx in across.clone() {
+                    let at = &mut bins.next[ty * self.tiles_x + tx];
+                    bins.flats[*at as usize] = *f;
+                    *at += 1;
                 }
-            });
+            }
+        }
+    }
+
+    /// Draws runs of triangles grouped by [`Raster::bin`], in order: each tile draws its
+    /// group of each run, run after run.
+    pub fn draw(&mut self, runs: &[&Bins]) {
+        self.tiles.par_iter_mut().enumerate().for_each(|(t, tile)| {
+            for bins in runs {
+                let group = bins.starts[t] as usize..bins.starts[t + 1] as usize;
+                for f in &bins.flats[group] {
+                    tile.fill(f);
+                }
+            }
+        });
     }
 
     /// The frame, row by row.
@@ -464,24 +531,27 @@ impl Raster {
 
 impl Tile {
     /// Draws the part of `f` within this tile.
-    fn fill(&mut self, f: &Flat, lighting: &Lighting) {
+    #[inline]
+    fn fill(&mut self, f: &Flat) {
         match *f {
-            Flat::Dot { at, depth, normal } => {
+            Flat::Dot { at, depth, rgb } => {
                 let at = (at.1 as usize - self.y0) * self.width + (at.0 as usize - self.x0);
                 if depth < self.depth[at] {
                     self.depth[at] = depth;
-                    self.rgb[at] = lighting.shade(normal);
+                    self.rgb[at] = rgb;
                 }
             }
             Flat::Spans {
                 x,
                 y,
                 z,
-                normal,
+                rgb,
                 cols,
                 rows,
             } => {
-                let corners = Corners::new(x, y, z);
+                let Some(corners) = Corners::new(x, y, z) else {
+                    return;
+                };
                 let cols = (
                     cols.0.max(self.x0 as u32),
                     cols.1.min((self.x0 + self.width) as u32),
@@ -490,7 +560,6 @@ impl Tile {
                     rows.0.max(self.y0 as u32),
                     rows.1.min((self.y0 + self.height) as u32),
                 );
-                let mut rgb = None;
                 for py in rows.0..rows.1 {
                     for px in cols.0..cols.1 {
                         let Some(depth) = corners.depth_at(px, py) else {
@@ -499,7 +568,7 @@ impl Tile {
                         let at = (py as usize - self.y0) * self.width + (px as usize - self.x0);
                         if depth < self.depth[at] {
                             self.depth[at] = depth;
-                            self.rgb[at] = *rgb.get_or_insert_with(|| lighting.shade(normal));
+                            self.rgb[at] = rgb;
                         }
                     }
                 }
@@ -619,7 +688,10 @@ mod tests {
                         if backwards {
                             t.swap(1, 2);
                         }
-                        let corners = Corners::new(t.map(|p| p.0), t.map(|p| p.1), [1.0; 3]);
+                        let Some(corners) = Corners::new(t.map(|p| p.0), t.map(|p| p.1), [1.0; 3])
+                        else {
+                            continue;
+                        };
                         for py in 0..40 {
                             for px in 0..40 {
                                 if let Some(depth) = corners.depth_at(px, py) {
@@ -641,5 +713,82 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn binned_runs_draw_what_every_triangle_drawn_over_the_frame_in_order_draws() {
+        // Triangles from less than a pixel to several tiles across, many overlapping at
+        // random depths, some with corners off the panel; cut into runs of random lengths.
+        let (width, height) = (200, 150);
+        let camera = Camera::fit(
+            [0.0, 0.0, 1.0],
+            [0.0, 1.0, 0.0],
+            [[0.0; 3], [1.0; 3]],
+            (width, height),
+            0.9,
+        );
+        let mut raster = Raster::new(camera, (width, height), [7, 8, 9]);
+        let mut random = xorshift(0x5851_f42d_4c95_7f2d);
+        let mut unit = move || (random() >> 11) as f32 / (1u64 << 53) as f32;
+        let flats: Vec<Flat> = (0..4000)
+            .filter_map(|i| {
+                let size = [0.004, 0.03, 0.3, 1.2][i % 4];
+                let centre = [unit() * 1.2 - 0.1, unit() * 1.2 - 0.1, unit()];
+                let corners: [[f32; 3]; 3] = std::array::from_fn(|_| {
+                    [
+                        centre[0] + (unit() - 0.5) * size,
+                        centre[1] + (unit() - 0.5) * size,
+                        centre[2] + (unit() - 0.5) * 0.1,
+                    ]
+                });
+                let screen = corners.map(|p| raster.screen(p));
+                raster.flatten(screen, raster.covers(screen)?, corners)
+            })
+            .collect();
+        let mut runs = Vec::new();
+        let mut rest = &flats[..];
+        let mut lengths = [1, 700, 0, 33, 1500].into_iter().cycle();
+        while !rest.is_empty() {
+            let (run, next) = rest.split_at(lengths.next().unwrap_or(1).min(rest.len()));
+            let mut bins = Bins::default();
+            raster.bin(run, &mut bins);
+            runs.push(bins);
+            rest = next;
+        }
+        raster.draw(&runs.iter().collect::<Vec<_>>());
+        // The reference: each triangle, in order, tested at every pixel of the frame.
+        let mut depth = vec![f32::INFINITY; width * height];
+        let mut rgb = vec![[7u8, 8, 9]; width * height];
+        for f in &flats {
+            for py in 0..height {
+                for px in 0..width {
+                    let drawn = match *f {
+                        Flat::Dot { at, depth, rgb } => {
+                            (at == (px as u32, py as u32)).then_some((depth, rgb))
+                        }
+                        Flat::Spans { x, y, z, rgb, .. } => Corners::new(x, y, z)
+                            .and_then(|c| c.depth_at(px as u32, py as u32))
+                            .map(|d| (d, rgb)),
+                    };
+                    let at = py * width + px;
+                    if let Some((d, c)) = drawn
+                        && d < depth[at]
+                    {
+                        depth[at] = d;
+                        rgb[at] = c;
+                    }
+                }
+            }
+        }
+        let drawn = raster.pixels();
+        assert!(drawn == rgb, "the binned draw differs from the reference");
+        // Most of the frame was drawn, from many runs.
+        let covered = depth.iter().filter(|d| d.is_finite()).count();
+        assert!(covered > width * height / 2, "{covered} pixels drawn");
+        assert!(
+            runs.len() > 4 && flats.len() > 2000,
+            "{} flats",
+            flats.len()
+        );
     }
 }
