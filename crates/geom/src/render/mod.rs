@@ -270,9 +270,12 @@ impl Preview {
         added
     }
 
-    /// Adds a whole mesh.
+    /// Adds a whole mesh. The arrays kept for a next chunk are let go (a whole mesh has
+    /// none): for a mesh of millions of vertices they are tens of megabytes.
     pub fn add_mesh(&mut self, mesh: &Mesh) -> Result<(), usize> {
-        self.add_indexed(&mesh.triangles, 0, &mesh.vertices, &[])
+        let added = self.add_indexed(&mesh.triangles, 0, &mesh.vertices, &[]);
+        self.scratch = Scratch::default();
+        added
     }
 
     /// Adds a chunk's triangles (corners resolved through the chunk's own and borrowed

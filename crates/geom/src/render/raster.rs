@@ -232,6 +232,8 @@ pub struct Bins {
     starts: Vec<u32>,
     /// Where the next triangle of each tile goes, while binning.
     next: Vec<u32>,
+    /// Each triangle's tile, while binning.
+    tile: Vec<u32>,
 }
 
 /// What fills [`Bins::flats`] before each place is written.
@@ -292,21 +294,21 @@ fn owns((a, b): ((f64, f64), (f64, f64))) -> bool {
     dy > 0.0 || (dy == 0.0 && dx > 0.0)
 }
 
-/// The pixels `i` of `0..n` whose centre `i + 0.5` lies in `[lo, hi]`, as `(first, last + 1)`;
-/// `None` when there are none (or a bound is NaN). Written without `ceil`/`floor`, which are
-/// library calls on the baseline x86-64 target and were a tenth of a big mesh's preview.
-fn centres(lo: f32, hi: f32, n: usize) -> Option<(u32, u32)> {
-    let (lo, hi) = (f64::from(lo) - 0.5, f64::from(hi) - 0.5);
+/// The pixels `i` of `0..n` whose centre `i + 0.5` lies in `[lo, hi]`, as `(first, last + 1)`,
+/// empty (`first ≥ last + 1`) when there are none or a bound is NaN. Without branches (most
+/// triangles of a big mesh are looked at here, and which way a test goes is random) and
+/// without `ceil`/`floor` (library calls on the baseline x86-64 target).
+#[inline(always)]
+fn centres(lo: f32, hi: f32, n: usize) -> (u32, u32) {
     let top = n as f64 - 1.0;
-    let some = lo <= hi && hi >= 0.0 && lo <= top;
-    if !some {
-        return None;
-    }
-    // Both within [0, n − 1] now, where truncation is the floor.
-    let (lo, hi) = (lo.max(0.0), hi.min(top));
+    // Exact: an f32 less a half is an f64. `max`/`min` drop a NaN, so a NaN `lo` becomes `n`
+    // and a NaN `hi` becomes −1: nothing between.
+    let lo = (f64::from(lo) - 0.5).max(0.0).min(n as f64);
+    let hi = (f64::from(hi) - 0.5).min(top).max(-1.0);
+    // `lo` in [0, n] and `hi + 1` in [0, n], where truncation is the floor.
     let first = lo as u32 + u32::from(f64::from(lo as u32) < lo);
-    let last = hi as u32;
-    (first <= last).then_some((first, last + 1))
+    let end = (hi + 1.0) as u32;
+    (first, end)
 }
 
 impl Raster {
@@ -404,17 +406,14 @@ impl Raster {
     /// projected corners alone.
     #[inline]
     pub fn covers(&self, s: [[f32; 3]; 3]) -> Option<((u32, u32), (u32, u32))> {
-        let (mut lo, mut hi) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
-        for c in &s {
-            for k in 0..2 {
-                lo[k] = lo[k].min(c[k]);
-                hi[k] = hi[k].max(c[k]);
-            }
-        }
-        Some((
-            centres(lo[0], hi[0], self.width)?,
-            centres(lo[1], hi[1], self.height)?,
-        ))
+        // A NaN corner drops out of the box here; the triangle then has a NaN area and is
+        // drawn nowhere ([`Corners::new`]).
+        let lo = [0, 1].map(|k| s[0][k].min(s[1][k]).min(s[2][k]));
+        let hi = [0, 1].map(|k| s[0][k].max(s[1][k]).max(s[2][k]));
+        let cols = centres(lo[0], hi[0], self.width);
+        let rows = centres(lo[1], hi[1], self.height);
+        // One branch for both axes.
+        ((cols.0 < cols.1) & (rows.0 < rows.1)).then_some((cols, rows))
     }
 
     /// A triangle ready to draw, of screen positions `s` covering `(cols, rows)`
@@ -475,8 +474,17 @@ impl Raster {
         let tiles = self.tiles.len();
         bins.starts.clear();
         bins.starts.resize(tiles + 1, 0);
+        // Each triangle's tile, or `MANY` when it reaches several (few do): found once.
+        const MANY: u32 = u32::MAX;
+        bins.tile.clear();
         for f in flats {
             let (across, down) = self.tiles_of(f);
+            let one = across.len() == 1 && down.len() == 1;
+            bins.tile.push(if one {
+                (down.start * self.tiles_x + across.start) as u32
+            } else {
+                MANY
+            });
             for ty in down {
                 for tx in across.clone() {
                     bins.starts[ty * self.tiles_x + tx + 1] += 1;
@@ -490,7 +498,13 @@ impl Raster {
         bins.next.extend_from_slice(&bins.starts[..tiles]);
         bins.flats.clear();
         bins.flats.resize(bins.starts[tiles] as usize, PLACEHOLDER);
-        for f in flats {
+        for (f, &tile) in flats.iter().zip(&bins.tile) {
+            if tile != MANY {
+                let at = &mut bins.next[tile as usize];
+                bins.flats[*at as usize] = *f;
+                *at += 1;
+                continue;
+            }
             let (across, down) = self.tiles_of(f);
             for ty in down {
                 for tx in across.clone() {
