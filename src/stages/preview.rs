@@ -22,7 +22,8 @@ use super::write::{MeshInput, OutputSink, WriteError};
 use crate::cache::{KeyBuilder, Param};
 
 /// 1: the first. 2: a caption band of one height; a 3D tiling fitted to its scaffold's box.
-pub const VERSION: u32 = 2;
+/// 3: projected and shaded in `f32` (a pixel's colour may move by a level, an edge by a pixel).
+pub const VERSION: u32 = 3;
 
 /// The default image size (`[build] preview_size`).
 pub const DEFAULT_SIZE: [u32; 2] = [1024, 768];
