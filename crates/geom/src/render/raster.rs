@@ -417,7 +417,7 @@ impl Raster {
     }
 
     /// A triangle ready to draw, of screen positions `s` covering `(cols, rows)`
-    /// ([`Raster::covers`]) and shaded (when drawn) by the normal of its model corners
+    /// ([`Raster::covers`]) and shaded by the normal of its model corners
     /// `corners`; `None` when its box holds one pixel centre and it does not cover it.
     #[inline]
     pub fn flatten(
@@ -596,17 +596,17 @@ mod tests {
     use super::*;
     use crate::render::xorshift;
 
+    /// A frame of `size` pixels looking down on the unit cube.
+    fn seen_from_above(size: (usize, usize), background: Rgb) -> Raster {
+        let top = [0.0, 0.0, 1.0];
+        let camera = Camera::fit(top, [0.0, 1.0, 0.0], [[0.0; 3], [1.0; 3]], size, 0.9);
+        Raster::new(camera, size, background)
+    }
+
     #[test]
     fn a_triangle_within_one_cell_covers_no_pixel_centre() {
         let (width, height) = (24, 16);
-        let camera = Camera::fit(
-            [0.0, 0.0, 1.0],
-            [0.0, 1.0, 0.0],
-            [[0.0; 3], [1.0; 3]],
-            (width, height),
-            0.9,
-        );
-        let raster = Raster::new(camera, (width, height), [0; 3]);
+        let raster = seen_from_above((width, height), [0; 3]);
         // Coordinates on centres, between them, on the panel's edges, far off it, NaN.
         let mut values: Vec<f32> = (-12..=4 * width as i32 + 12)
             .map(|k| k as f32 / 4.0)
@@ -734,14 +734,7 @@ mod tests {
         // Triangles from less than a pixel to several tiles across, many overlapping at
         // random depths, some with corners off the panel; cut into runs of random lengths.
         let (width, height) = (200, 150);
-        let camera = Camera::fit(
-            [0.0, 0.0, 1.0],
-            [0.0, 1.0, 0.0],
-            [[0.0; 3], [1.0; 3]],
-            (width, height),
-            0.9,
-        );
-        let mut raster = Raster::new(camera, (width, height), [7, 8, 9]);
+        let mut raster = seen_from_above((width, height), [7, 8, 9]);
         let mut random = xorshift(0x5851_f42d_4c95_7f2d);
         let mut unit = move || (random() >> 11) as f32 / (1u64 << 53) as f32;
         let flats: Vec<Flat> = (0..4000)
