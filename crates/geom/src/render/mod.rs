@@ -23,10 +23,12 @@ pub mod section;
 use std::io::{self, Write};
 
 use crate::mesh::{Mesh, MeshChunk};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
 use rayon::prelude::*;
 
 use pass::Keyed;
-use raster::{Bins, Camera, Flat, Raster, Rgb};
+use raster::{Camera, Frame, Raster, Rgb};
 use section::{Section, Segment};
 
 const BACKGROUND: Rgb = [250, 250, 250];
@@ -41,29 +43,17 @@ const FRAME: Rgb = [200, 200, 205];
 const MAX_WARNINGS: usize = 4;
 /// The share of a panel the drawing fills.
 const FILL: f64 = 0.86;
-/// Triangles per batch: bounds the memory of a whole-mesh render.
-const BATCH: usize = 1 << 18;
 /// Triangles one task takes in a row, so the thread pool's cost per task is small against it.
 const RUN: usize = pass::RUN;
+/// At most this many frames draw a view at once (each is the size of the view).
+const MAX_PARTS: usize = 8;
 
-/// Arrays kept from one chunk to the next: a tiling's hundreds of chunks would otherwise
-/// each fault fresh pages in for them.
-#[derive(Default)]
-struct Scratch {
-    keys: pass::Keys,
-    /// One per run of a batch.
-    runs: Vec<Run>,
-}
-
-/// What one run of triangles adds: its triangles ready to draw, grouped by tile, and its
-/// cuts by the section's plane.
-#[derive(Default)]
-struct Run {
-    /// In the run's order, before grouping.
-    flats: Vec<Flat>,
-    bins: Bins,
+/// What one worker drew: its frame of the view, and the cuts by the section's plane not yet
+/// recorded.
+struct Part {
+    frame: Frame,
     cuts: Vec<Segment>,
-    /// The first triangle with a corner the chunk does not have.
+    /// The first triangle it met with a corner the chunk does not have.
     bad: Option<usize>,
 }
 
@@ -146,7 +136,13 @@ pub struct Preview {
     layout: Layout,
     view: Raster,
     section: Option<Section>,
-    scratch: Scratch,
+    /// One per worker, made when the first triangles come.
+    parts: Vec<Part>,
+    /// Triangles added so far: the next one's number.
+    added: u64,
+    /// The keys of a chunk's vertices, kept from one chunk to the next: a tiling's hundreds
+    /// of chunks would otherwise each fault fresh pages in for them.
+    keys: pass::Keys,
 }
 
 impl Preview {
@@ -169,7 +165,9 @@ impl Preview {
             layout,
             view,
             section,
-            scratch: Scratch::default(),
+            parts: Vec::new(),
+            added: 0,
+            keys: pass::Keys::default(),
         }
     }
 
@@ -187,67 +185,62 @@ impl Preview {
     }
 
     /// Adds `triangles`, their corners found in `vertices`; `Err(i)` when triangle `i` has
-    /// one that is not there. Runs of triangles are projected and cut in parallel, then drawn
-    /// and filled in triangle order. Only the few triangles not passed over ([`pass`]) are
-    /// looked at: their corners projected, their box and cut found.
+    /// one that is not there. Workers take runs of triangles as they come free, each drawing
+    /// into its own frame (the picture does not depend on which drew what, see [`raster`]).
+    /// Only the triangles not passed over ([`pass`]) are looked at: their corners projected,
+    /// their box and cut found.
     fn add(
-        &mut self,
-        triangles: &[[u32; 3]],
+        view: &Raster,
+        section: Option<&Section>,
+        parts: &mut [Part],
+        (triangles, first_index): (&[[u32; 3]], u64),
         vertices: &Keyed,
-        runs: &mut Vec<Run>,
     ) -> Result<(), usize> {
-        let mut start = 0;
-        while start < triangles.len() {
-            let end = (start + BATCH).min(triangles.len());
-            let (view, section) = (&self.view, self.section.as_ref());
-            let count = (end - start).div_ceil(RUN);
-            if runs.len() < count {
-                runs.resize_with(count, Run::default);
-            }
-            let runs = &mut runs[..count];
-            runs.par_iter_mut().enumerate().for_each(|(r, run)| {
-                let first = start + r * RUN;
-                let last = (first + RUN).min(end);
+        let runs = triangles.len().div_ceil(RUN);
+        let next = AtomicUsize::new(0);
+        parts.par_iter_mut().for_each(|part| {
+            loop {
+                let r = next.fetch_add(1, Ordering::Relaxed);
+                if r >= runs {
+                    break;
+                }
+                let first = r * RUN;
+                let last = (first + RUN).min(triangles.len());
                 let (looked_at, count) = vertices.look_at(&triangles[first..last]);
-                run.flats.clear();
-                run.cuts.clear();
-                run.bad = None;
                 for &k in &looked_at[..count] {
                     let i = first + k as usize;
                     let t = triangles[i];
                     let (Some(a), Some(b), Some(c)) = (
-                        vertices.model(t[0]),
-                        vertices.model(t[1]),
-                        vertices.model(t[2]),
+                        vertices.corner(t[0]),
+                        vertices.corner(t[1]),
+                        vertices.corner(t[2]),
                     ) else {
-                        run.bad = Some(i);
-                        return;
+                        part.bad = Some(part.bad.map_or(i, |b| b.min(i)));
+                        break;
                     };
+                    let model = [a.0, b.0, c.0];
                     // Projected again (the same bits as for its key).
-                    let model = [a, b, c];
                     let screen = model.map(|p| view.screen(p));
-                    if let Some(cover) = view.covers(screen) {
-                        run.flats.extend(view.flatten(screen, cover, model));
+                    // The box's centres from the keys where they tell (most often).
+                    let centres = pass::centres([a.1, b.1, c.1]).or_else(|| view.covers(screen));
+                    if let Some(centres) = centres {
+                        view.draw(
+                            &mut part.frame,
+                            first_index + i as u64,
+                            (screen, model),
+                            centres,
+                        );
                     }
                     if let Some(s) = section
                         && s.meets([model[0][2], model[1][2], model[2][2]])
                     {
-                        run.cuts.extend(s.segment(model));
+                        part.cuts.extend(s.segment(model));
                     }
                 }
-                view.bin(&run.flats, &mut run.bins);
-            });
-            if let Some(bad) = runs.iter().find_map(|r| r.bad) {
-                return Err(bad);
             }
-            let bins: Vec<&Bins> = runs.iter().map(|r| &r.bins).collect();
-            self.view.draw(&bins);
-            if let Some(section) = &mut self.section {
-                for cut in runs.iter().flat_map(|r| r.cuts.iter()) {
-                    section.cross(*cut);
-                }
-            }
-            start = end;
+        });
+        if let Some(bad) = parts.iter_mut().filter_map(|p| p.bad.take()).min() {
+            return Err(bad);
         }
         Ok(())
     }
@@ -262,19 +255,42 @@ impl Preview {
         own: &[[f32; 3]],
         borrowed: &[(u32, [f32; 3])],
     ) -> Result<(), usize> {
-        let mut scratch = std::mem::take(&mut self.scratch);
+        if self.parts.is_empty() {
+            let workers = rayon::current_num_threads().clamp(1, MAX_PARTS);
+            self.parts = (0..workers)
+                .map(|_| Part {
+                    frame: self.view.frame(),
+                    cuts: Vec::new(),
+                    bad: None,
+                })
+                .collect();
+        }
         let z0 = self.section.as_ref().map(|s| s.z0);
-        let vertices = scratch.keys.key(&self.view, z0, first, own, borrowed);
-        let added = self.add(triangles, &vertices, &mut scratch.runs);
-        self.scratch = scratch;
+        let vertices = self.keys.key(&self.view, z0, first, own, borrowed);
+        let added = Preview::add(
+            &self.view,
+            self.section.as_ref(),
+            &mut self.parts,
+            (triangles, self.added),
+            &vertices,
+        );
+        self.added += triangles.len() as u64;
+        // The section's crossings are sorted before it is filled: any order will do.
+        if let Some(section) = &mut self.section {
+            for part in &mut self.parts {
+                for cut in part.cuts.drain(..) {
+                    section.cross(cut);
+                }
+            }
+        }
         added
     }
 
-    /// Adds a whole mesh. The arrays kept for a next chunk are let go (a whole mesh has
-    /// none): for a mesh of millions of vertices they are tens of megabytes.
+    /// Adds a whole mesh. The keys kept for a next chunk are let go (a whole mesh has none):
+    /// for a mesh of millions of vertices they are tens of megabytes.
     pub fn add_mesh(&mut self, mesh: &Mesh) -> Result<(), usize> {
         let added = self.add_indexed(&mesh.triangles, 0, &mesh.vertices, &[]);
-        self.scratch = Scratch::default();
+        self.keys = pass::Keys::default();
         added
     }
 
@@ -299,7 +315,8 @@ impl Preview {
             rgb: vec![BACKGROUND; width * height],
         };
         let h = layout.panel_height.min(height);
-        let view = self.view.pixels();
+        let frames: Vec<Frame> = self.parts.drain(..).map(|p| p.frame).collect();
+        let view = self.view.pixels(&frames);
         image.blit(layout.view.0, &view, layout.view.1, h);
         let s = layout.text_scale;
         if let (Some(section), Some((x0, w))) = (self.section.as_mut(), layout.section) {

@@ -96,6 +96,23 @@ fn passed_over(a: u32, b: u32, c: u32) -> bool {
     agree(0xffff) | agree(0xffff_0000)
 }
 
+/// The pixel columns and rows whose centres the box of a triangle holds, from its corners'
+/// [`pass_key`]s: `[min, max)` of their cells on each axis, which is what [`Raster::covers`]
+/// finds from their screen positions (`None` from it where a range is empty). `None` when a
+/// corner has no cell (the caller then asks [`Raster::covers`]).
+#[inline(always)]
+pub fn centres(keys: [u32; 3]) -> Option<((u32, u32), (u32, u32))> {
+    let [a, b, c] = keys;
+    if (a | b | c) & (NO_CELL | NO_CELL << 16) != 0 {
+        return None;
+    }
+    let range = |shift: u32| {
+        let [a, b, c] = [a, b, c].map(|k| k >> shift & (NO_CELL - 1));
+        (a.min(b).min(c), a.max(b).max(c))
+    };
+    Some((range(0), range(16)))
+}
+
 /// The keys of a chunk's vertices, kept from one chunk to the next: a tiling's hundreds of
 /// chunks would otherwise each fault fresh pages in for them.
 #[derive(Default)]
@@ -152,11 +169,18 @@ impl Keys {
 }
 
 impl Keyed<'_> {
-    /// Vertex `id`'s model position, if the chunk has it.
-    pub fn model(&self, id: u32) -> Option<[f32; 3]> {
+    /// Vertex `id`'s model position and key, if the chunk has it.
+    #[inline(always)]
+    pub fn corner(&self, id: u32) -> Option<([f32; 3], u32)> {
         match id.checked_sub(self.first) {
-            Some(own) => self.own.get(own as usize).copied(),
-            None => Some(self.borrowed[*self.borrowed_at.get(&id)? as usize].1),
+            Some(own) => {
+                let own = own as usize;
+                Some((*self.own.get(own)?, *self.own_keys.get(own)?))
+            }
+            None => {
+                let at = *self.borrowed_at.get(&id)? as usize;
+                Some((self.borrowed[at].1, self.borrowed_keys[at]))
+            }
         }
     }
 
@@ -232,14 +256,14 @@ mod tests {
     use crate::render::xorshift;
 
     #[test]
-    fn a_triangle_passed_over_covers_no_centre_and_meets_no_plane() {
+    fn a_triangle_passed_over_covers_no_centre_and_meets_no_plane_and_keys_give_its_box() {
         let (size, bbox) = ((120, 90), [[0.0; 3], [1.0; 3]]);
         let camera = Camera::fit([1.0, -1.0, 1.0], [0.0, 0.0, 1.0], bbox, size, 0.9);
         let view = Raster::new(camera, size, [0; 3]);
         let z0 = 0.5;
         let mut random = xorshift(0x2545_f491_4f6c_dd1d);
         let mut unit = || (random() >> 11) as f32 / (1u64 << 53) as f32;
-        let (mut passed, rounds) = (0, 200_000);
+        let (mut passed, mut boxed, rounds) = (0, 0, 200_000);
         for round in 0..rounds {
             // Corners a fraction of a pixel apart (a pixel is ~1/100 of the box here), some
             // exactly on the plane, some far off the panel.
@@ -252,16 +276,26 @@ mod tests {
                 })
             });
             let keys = corners.map(|p| vertex_key(&view, z0, p));
+            let screen = corners.map(|p| view.screen(p));
+            if let Some((cols, rows)) = centres(keys) {
+                boxed += 1;
+                let some = cols.0 < cols.1 && rows.0 < rows.1;
+                assert_eq!(
+                    some.then_some((cols, rows)),
+                    view.covers(screen),
+                    "{corners:?}"
+                );
+            }
             if passed_over(keys[0], keys[1], keys[2]) {
                 passed += 1;
-                let screen = corners.map(|p| view.screen(p));
                 assert_eq!(view.covers(screen), None, "{corners:?}");
                 let above = corners.map(|p| f64::from(p[2]) >= z0);
                 assert!(above.iter().all(|&a| a == above[0]), "{corners:?}");
             }
         }
-        // Most such triangles are passed over, not only a few.
+        // Most such triangles are passed over, and most have their box from their keys.
         assert!(passed > rounds / 3, "{passed} of {rounds}");
+        assert!(boxed > rounds / 2, "{boxed} of {rounds}");
     }
 
     #[test]

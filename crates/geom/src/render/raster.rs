@@ -1,12 +1,13 @@
-//! A z-buffered rasteriser of flat-shaded triangles, in fixed tiles, for one orthographic view.
+//! A z-buffered rasteriser of flat-shaded triangles for one orthographic view.
 //!
 //! Invariants:
-//! - Deterministic for any thread count: triangles come in runs, in order, each projected,
-//!   shaded and grouped by tile by pure functions ([`Raster::screen`], [`Raster::covers`],
-//!   [`Raster::flatten`], [`Raster::bin`], run in parallel by the caller); each tile draws
-//!   its group of each run, run after run, each in triangle order, keeping a fragment only
-//!   when it is strictly nearer (the first triangle wins a tie). So a pixel's colour depends
-//!   only on the sequence of triangles, never on which thread drew which tile.
+//! - Deterministic for any thread count and any order: each triangle is projected and
+//!   shaded by pure functions ([`Raster::screen`], [`Raster::colour`]), and a pixel keeps the
+//!   least of its fragments' [`nearest`] numbers (depth first, then the triangle's place in
+//!   the sequence). A least is the same however the triangles are shared among [`Frame`]s and
+//!   in whatever order each draws its share, and it is the fragment that drawing every
+//!   triangle in order, keeping only strictly nearer ones, would leave: the first triangle
+//!   wins a tie. So the caller may hand runs of triangles to threads as they come free.
 //! - Watertight: a pixel centre on an edge shared by two triangles is drawn by exactly one of
 //!   them. The edge function at a centre `p` is `(a − p) × (b − p)`, whose bits for `b → a`
 //!   are exactly the negated bits for `a → b`, so both triangles see the same value, and an
@@ -15,10 +16,6 @@
 //!   (its outward normal pointing away from the viewer) is tinted red, so an open or inverted
 //!   surface shows where its inside is visible.
 //!
-//! - Most triangles of a big mesh cover at most one pixel centre: one whose box holds a
-//!   single centre is tested against it when it is made ([`Flat::Dot`]), so only those that
-//!   cover it reach the tiles.
-//!
 //! Why no crate: what is needed is ~200 lines (orthographic camera, edge functions, z-buffer),
 //! and the determinism and streaming above (chunks added as they are read) are easier to
 //! guarantee in our own loop than through a general 3D renderer.
@@ -26,9 +23,6 @@
 use rayon::prelude::*;
 
 use crate::vec3::{cross, dot};
-
-/// Tile edge in pixels.
-const TILE: usize = 64;
 
 pub type Rgb = [u8; 3];
 
@@ -110,40 +104,6 @@ impl Camera {
     }
 }
 
-/// A triangle ready to draw, shaded. Most triangles of a big mesh are smaller than a pixel:
-/// one whose box holds a single pixel centre is tested against it when it is made, and kept
-/// (as a [`Flat::Dot`]) only if it covers it.
-#[derive(Clone, Copy)]
-pub enum Flat {
-    /// Corners in pixels (f32, so a shared corner is the same bits in every triangle using
-    /// it), depths, the colour, and the pixel columns `x0..x1` and rows `y0..y1` whose
-    /// centres its box holds.
-    Spans {
-        x: [f32; 3],
-        y: [f32; 3],
-        z: [f32; 3],
-        rgb: Rgb,
-        cols: (u32, u32),
-        rows: (u32, u32),
-    },
-    /// A triangle covering the one pixel centre `at` in its box, at `depth` there.
-    Dot {
-        at: (u32, u32),
-        depth: f32,
-        rgb: Rgb,
-    },
-}
-
-impl Flat {
-    /// The pixel columns and rows it may draw.
-    fn reach(&self) -> ((u32, u32), (u32, u32)) {
-        match *self {
-            Flat::Spans { cols, rows, .. } => (cols, rows),
-            Flat::Dot { at, .. } => ((at.0, at.0 + 1), (at.1, at.1 + 1)),
-        }
-    }
-}
-
 /// A triangle's corners in pixels, tested against pixel centres: it covers a centre `p`
 /// where its three edge functions there, `(a − p) × (b − p)` for each edge `a → b`, have the
 /// sign of its area, or are zero on an edge that owns its line ([`owns`]), run the way the
@@ -214,36 +174,51 @@ impl Corners {
     }
 }
 
-struct Tile {
-    x0: usize,
-    y0: usize,
-    width: usize,
-    height: usize,
-    depth: Vec<f32>,
+/// What part of a view's triangles drew: at each pixel, the nearest fragment found so far.
+/// A view's triangles may be shared among several frames in any way (one per thread, say):
+/// [`Raster::pixels`] takes the nearest of theirs, which is the same whatever the sharing.
+pub struct Frame {
+    /// The fragment's depth and triangle as one number ([`nearest`]), [`EMPTY`] where none.
+    nearest: Vec<u64>,
     rgb: Vec<Rgb>,
 }
 
-/// A run of triangles ready to draw, grouped by tile ([`Raster::bin`]); kept from one run to
-/// the next, so its arrays are allocated once.
-#[derive(Default)]
-pub struct Bins {
-    /// Tile `t`'s group is `flats[starts[t]..starts[t + 1]]`.
-    flats: Vec<Flat>,
-    starts: Vec<u32>,
-    /// Where the next triangle of each tile goes, while binning.
-    next: Vec<u32>,
-    /// Each triangle's tile, while binning.
-    tile: Vec<u32>,
+/// A pixel no triangle has drawn.
+const EMPTY: u64 = u64::MAX;
+
+/// A fragment of depth `depth` (finite or −∞, not NaN) from the triangle numbered `index` in
+/// the order triangles were added, as one number: the smaller number is the nearer fragment,
+/// or on a tie of depth the earlier triangle's. So the nearest over any sharing of the
+/// triangles is the one the first triangle of least depth draws, as drawing them one by one in
+/// order and keeping only strictly nearer fragments would leave. Below [`EMPTY`].
+#[inline(always)]
+fn nearest(depth: f32, index: u64) -> u64 {
+    // `+ 0.0` makes −0 into +0, which compares equal to it. The bits of a float, with the
+    // sign bit flipped when positive and all bits when negative, order as the float does.
+    let bits = (depth + 0.0).to_bits();
+    let ordered = bits ^ ((bits as i32 >> 31) as u32 | 1 << 31);
+    // The index wraps past 2³² triangles: ties (of exactly equal depth) are then settled by
+    // the colour too ([`Frame::offer`]), still the same whatever the sharing.
+    u64::from(ordered) << 32 | (index & 0xffff_ffff)
 }
 
-/// What fills [`Bins::flats`] before each place is written.
-const PLACEHOLDER: Flat = Flat::Dot {
-    at: (0, 0),
-    depth: f32::INFINITY,
-    rgb: [0; 3],
-};
+impl Frame {
+    /// Keeps the fragment `key` ([`nearest`]) of colour `rgb()` at pixel `at` if it is nearer
+    /// than the one there (or, for the same key, of a smaller colour): the colour is worked
+    /// out only then.
+    #[inline(always)]
+    fn offer(&mut self, at: usize, key: u64, rgb: impl FnOnce() -> Rgb) {
+        let here = self.nearest[at];
+        if key < here {
+            self.nearest[at] = key;
+            self.rgb[at] = rgb();
+        } else if key == here {
+            self.rgb[at] = self.rgb[at].min(rgb());
+        }
+    }
+}
 
-/// One view's frame: its camera, colour and depth per pixel, in tiles.
+/// One view: its camera and lighting, and the map from model points to pixels.
 pub struct Raster {
     pub camera: Camera,
     /// The camera's map to pixels across, down and depth, as `f32` rows `[x, y, z, 1]·row`.
@@ -252,8 +227,7 @@ pub struct Raster {
     last_cell: [f32; 2],
     width: usize,
     height: usize,
-    tiles_x: usize,
-    tiles: Vec<Tile>,
+    background: Rgb,
     lighting: Lighting,
 }
 
@@ -312,25 +286,8 @@ fn centres(lo: f32, hi: f32, n: usize) -> (u32, u32) {
 }
 
 impl Raster {
-    /// An empty frame of `size` pixels (all `background`) for `camera`.
+    /// A view of `size` pixels for `camera`, `background` where nothing is drawn.
     pub fn new(camera: Camera, (width, height): (usize, usize), background: Rgb) -> Raster {
-        let tiles_x = width.div_ceil(TILE);
-        let tiles_y = height.div_ceil(TILE);
-        let mut tiles = Vec::with_capacity(tiles_x * tiles_y);
-        for ty in 0..tiles_y {
-            for tx in 0..tiles_x {
-                let (x0, y0) = (tx * TILE, ty * TILE);
-                let (w, h) = (TILE.min(width - x0), TILE.min(height - y0));
-                tiles.push(Tile {
-                    x0,
-                    y0,
-                    width: w,
-                    height: h,
-                    depth: vec![f32::INFINITY; w * h],
-                    rgb: vec![background; w * h],
-                });
-            }
-        }
         // A key light from the viewer's upper left, a weaker fill from the right.
         let key = normalize(mix(
             camera.toward,
@@ -358,8 +315,7 @@ impl Raster {
             last_cell: [width as f32 + 0.5, height as f32 + 0.5],
             width,
             height,
-            tiles_x,
-            tiles,
+            background,
             lighting: Lighting {
                 toward: camera.toward.map(|v| v as f32),
                 lights: [key, fill].map(|l| l.map(|v| v as f32)),
@@ -416,178 +372,73 @@ impl Raster {
         ((cols.0 < cols.1) & (rows.0 < rows.1)).then_some((cols, rows))
     }
 
-    /// A triangle ready to draw, of screen positions `s` covering `(cols, rows)`
-    /// ([`Raster::covers`]) and shaded by the normal of its model corners
-    /// `corners`; `None` when its box holds one pixel centre and it does not cover it.
+    /// The colour of a face of model corners `corners`.
     #[inline]
-    pub fn flatten(
+    pub fn colour(&self, [a, b, c]: [[f32; 3]; 3]) -> Rgb {
+        let (u, v) = (
+            [0, 1, 2].map(|k| b[k] - a[k]),
+            [0, 1, 2].map(|k| c[k] - a[k]),
+        );
+        let normal = [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ];
+        self.lighting.shade(normal)
+    }
+
+    /// A frame of this view with nothing drawn.
+    pub fn frame(&self) -> Frame {
+        Frame {
+            nearest: vec![EMPTY; self.width * self.height],
+            rgb: vec![[0; 3]; self.width * self.height],
+        }
+    }
+
+    /// Draws into `frame` the triangle numbered `index` (in the order triangles are added),
+    /// of screen positions `s` and model corners `corners`, coloured by its face; `(cols,
+    /// rows)` are the pixels whose centres its box holds ([`Raster::covers`]).
+    #[inline]
+    pub fn draw(
         &self,
-        s: [[f32; 3]; 3],
+        frame: &mut Frame,
+        index: u64,
+        (s, corners): ([[f32; 3]; 3], [[f32; 3]; 3]),
         (cols, rows): ((u32, u32), (u32, u32)),
-        corners: [[f32; 3]; 3],
-    ) -> Option<Flat> {
-        let (x, y, z) = (s.map(|c| c[0]), s.map(|c| c[1]), s.map(|c| c[2]));
-        let rgb = || {
-            let [a, b, c] = corners;
-            let (u, v) = (
-                [0, 1, 2].map(|k| b[k] - a[k]),
-                [0, 1, 2].map(|k| c[k] - a[k]),
-            );
-            let normal = [
-                u[1] * v[2] - u[2] * v[1],
-                u[2] * v[0] - u[0] * v[2],
-                u[0] * v[1] - u[1] * v[0],
-            ];
-            self.lighting.shade(normal)
+    ) {
+        let Some(c) = Corners::new(s.map(|c| c[0]), s.map(|c| c[1]), s.map(|c| c[2])) else {
+            return;
         };
-        if cols.1 - cols.0 == 1 && rows.1 - rows.0 == 1 {
-            let depth = Corners::new(x, y, z)?.depth_at(cols.0, rows.0)?;
-            return Some(Flat::Dot {
-                at: (cols.0, rows.0),
-                depth,
-                rgb: rgb(),
-            });
-        }
-        Some(Flat::Spans {
-            x,
-            y,
-            z,
-            rgb: rgb(),
-            cols,
-            rows,
-        })
-    }
-
-    /// The tiles `f` reaches, as a range of tile columns and one of tile rows.
-    fn tiles_of(&self, f: &Flat) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
-        let (cols, rows) = f.reach();
-        let across = cols.0 as usize / TILE..(cols.1 as usize - 1) / TILE + 1;
-        let down = rows.0 as usize / TILE..(rows.1 as usize - 1) / TILE + 1;
-        (across, down)
-    }
-
-    /// Groups `flats` (a run of triangles, in order) by the tiles they reach into `bins`,
-    /// each group in the run's order; a triangle reaching several tiles is in each of their
-    /// groups. A pure function, run on each run in parallel by the caller: each tile then
-    /// reads its triangles one after the other in memory.
-    pub fn bin(&self, flats: &[Flat], bins: &mut Bins) {
-        let tiles = self.tiles.len();
-        bins.starts.clear();
-        bins.starts.resize(tiles + 1, 0);
-        // Each triangle's tile, or `MANY` when it reaches several (few do): found once.
-        const MANY: u32 = u32::MAX;
-        bins.tile.clear();
-        for f in flats {
-            let (across, down) = self.tiles_of(f);
-            let one = across.len() == 1 && down.len() == 1;
-            bins.tile.push(if one {
-                (down.start * self.tiles_x + across.start) as u32
-            } else {
-                MANY
-            });
-            for ty in down {
-                for tx in across.clone() {
-                    bins.starts[ty * self.tiles_x + tx + 1] += 1;
-                }
-            }
-        }
-        for t in 0..tiles {
-            bins.starts[t + 1] += bins.starts[t];
-        }
-        bins.next.clear();
-        bins.next.extend_from_slice(&bins.starts[..tiles]);
-        bins.flats.clear();
-        bins.flats.resize(bins.starts[tiles] as usize, PLACEHOLDER);
-        for (f, &tile) in flats.iter().zip(&bins.tile) {
-            if tile != MANY {
-                let at = &mut bins.next[tile as usize];
-                bins.flats[*at as usize] = *f;
-                *at += 1;
-                continue;
-            }
-            let (across, down) = self.tiles_of(f);
-            for ty in down {
-                for tx in across.clone() {
-                    let at = &mut bins.next[ty * self.tiles_x + tx];
-                    bins.flats[*at as usize] = *f;
-                    *at += 1;
-                }
-            }
-        }
-    }
-
-    /// Draws runs of triangles grouped by [`Raster::bin`], in order: each tile draws its
-    /// group of each run, run after run.
-    pub fn draw(&mut self, runs: &[&Bins]) {
-        self.tiles.par_iter_mut().enumerate().for_each(|(t, tile)| {
-            for bins in runs {
-                let group = bins.starts[t] as usize..bins.starts[t + 1] as usize;
-                for f in &bins.flats[group] {
-                    tile.fill(f);
-                }
-            }
-        });
-    }
-
-    /// The frame, row by row.
-    pub fn pixels(&self) -> Vec<Rgb> {
-        let mut out = vec![[0u8; 3]; self.width * self.height];
-        for tile in &self.tiles {
-            for row in 0..tile.height {
-                let at = (tile.y0 + row) * self.width + tile.x0;
-                out[at..at + tile.width]
-                    .copy_from_slice(&tile.rgb[row * tile.width..(row + 1) * tile.width]);
-            }
-        }
-        out
-    }
-}
-
-impl Tile {
-    /// Draws the part of `f` within this tile.
-    #[inline]
-    fn fill(&mut self, f: &Flat) {
-        match *f {
-            Flat::Dot { at, depth, rgb } => {
-                let at = (at.1 as usize - self.y0) * self.width + (at.0 as usize - self.x0);
-                if depth < self.depth[at] {
-                    self.depth[at] = depth;
-                    self.rgb[at] = rgb;
-                }
-            }
-            Flat::Spans {
-                x,
-                y,
-                z,
-                rgb,
-                cols,
-                rows,
-            } => {
-                let Some(corners) = Corners::new(x, y, z) else {
-                    return;
+        // Worked out once, and only if a fragment is kept (most are, the first time).
+        let mut rgb = None;
+        for py in rows.0..rows.1 {
+            for px in cols.0..cols.1 {
+                // Not drawn at a NaN or +∞ depth, as a z-buffer starting at +∞ would not.
+                let Some(depth) = c.depth_at(px, py).filter(|&d| d < f32::INFINITY) else {
+                    continue;
                 };
-                let cols = (
-                    cols.0.max(self.x0 as u32),
-                    cols.1.min((self.x0 + self.width) as u32),
-                );
-                let rows = (
-                    rows.0.max(self.y0 as u32),
-                    rows.1.min((self.y0 + self.height) as u32),
-                );
-                for py in rows.0..rows.1 {
-                    for px in cols.0..cols.1 {
-                        let Some(depth) = corners.depth_at(px, py) else {
-                            continue;
-                        };
-                        let at = (py as usize - self.y0) * self.width + (px as usize - self.x0);
-                        if depth < self.depth[at] {
-                            self.depth[at] = depth;
-                            self.rgb[at] = rgb;
-                        }
-                    }
-                }
+                let at = py as usize * self.width + px as usize;
+                frame.offer(at, nearest(depth, index), || {
+                    *rgb.get_or_insert_with(|| self.colour(corners))
+                });
             }
         }
+    }
+
+    /// The picture, row by row: at each pixel the nearest fragment of all `frames`, which
+    /// together drew every triangle.
+    pub fn pixels(&self, frames: &[Frame]) -> Vec<Rgb> {
+        (0..self.width * self.height)
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|at| {
+                let best = frames.iter().map(|f| (f.nearest[at], f.rgb[at])).min();
+                match best {
+                    Some((key, rgb)) if key != EMPTY => rgb,
+                    _ => self.background,
+                }
+            })
+            .collect()
     }
 }
 
@@ -729,73 +580,94 @@ mod tests {
         }
     }
 
+    /// Draws triangle `t` (model corners) if its box holds a centre.
+    fn draw(raster: &Raster, frame: &mut Frame, index: u64, t: [[f32; 3]; 3]) {
+        let s = t.map(|p| raster.screen(p));
+        if let Some(centres) = raster.covers(s) {
+            raster.draw(frame, index, (s, t), centres);
+        }
+    }
+
     #[test]
-    fn binned_runs_draw_what_every_triangle_drawn_over_the_frame_in_order_draws() {
-        // Triangles from less than a pixel to several tiles across, many overlapping at
-        // random depths, some with corners off the panel; cut into runs of random lengths.
+    fn triangles_shared_among_frames_in_any_order_draw_what_drawing_each_in_order_draws() {
+        // Triangles from less than a pixel to most of the frame across, many overlapping at
+        // random depths, some with corners off the panel; and some drawn again later, the
+        // same or turned the other way (the same depths, another colour), which must lose.
         let (width, height) = (200, 150);
-        let mut raster = seen_from_above((width, height), [7, 8, 9]);
+        let raster = seen_from_above((width, height), [7, 8, 9]);
         let mut random = xorshift(0x5851_f42d_4c95_7f2d);
-        let mut unit = move || (random() >> 11) as f32 / (1u64 << 53) as f32;
-        let flats: Vec<Flat> = (0..4000)
-            .filter_map(|i| {
+        let mut unit = {
+            let mut random = xorshift(0x2545_f491_4f6c_dd1d);
+            move || (random() >> 11) as f32 / (1u64 << 53) as f32
+        };
+        let mut triangles: Vec<[[f32; 3]; 3]> = (0..4000)
+            .map(|i| {
                 let size = [0.004, 0.03, 0.3, 1.2][i % 4];
                 let centre = [unit() * 1.2 - 0.1, unit() * 1.2 - 0.1, unit()];
-                let corners: [[f32; 3]; 3] = std::array::from_fn(|_| {
+                std::array::from_fn(|_| {
                     [
                         centre[0] + (unit() - 0.5) * size,
                         centre[1] + (unit() - 0.5) * size,
                         centre[2] + (unit() - 0.5) * 0.1,
                     ]
-                });
-                let screen = corners.map(|p| raster.screen(p));
-                raster.flatten(screen, raster.covers(screen)?, corners)
+                })
             })
             .collect();
-        let mut runs = Vec::new();
-        let mut rest = &flats[..];
-        let mut lengths = [1, 700, 0, 33, 1500].into_iter().cycle();
-        while !rest.is_empty() {
-            let (run, next) = rest.split_at(lengths.next().unwrap_or(1).min(rest.len()));
-            let mut bins = Bins::default();
-            raster.bin(run, &mut bins);
-            runs.push(bins);
-            rest = next;
+        for i in (0..4000).step_by(7) {
+            let [a, b, c] = triangles[i];
+            triangles.push(if i % 2 == 0 { [a, c, b] } else { [a, b, c] });
         }
-        raster.draw(&runs.iter().collect::<Vec<_>>());
-        // The reference: each triangle, in order, tested at every pixel of the frame.
+        // The reference: each triangle, in order, tested at every pixel of the frame, a
+        // fragment kept only when strictly nearer.
         let mut depth = vec![f32::INFINITY; width * height];
         let mut rgb = vec![[7u8, 8, 9]; width * height];
-        for f in &flats {
+        for t in &triangles {
+            let s = t.map(|p| raster.screen(p));
+            let Some(c) = Corners::new(s.map(|p| p[0]), s.map(|p| p[1]), s.map(|p| p[2])) else {
+                continue;
+            };
             for py in 0..height {
                 for px in 0..width {
-                    let drawn = match *f {
-                        Flat::Dot { at, depth, rgb } => {
-                            (at == (px as u32, py as u32)).then_some((depth, rgb))
-                        }
-                        Flat::Spans { x, y, z, rgb, .. } => Corners::new(x, y, z)
-                            .and_then(|c| c.depth_at(px as u32, py as u32))
-                            .map(|d| (d, rgb)),
-                    };
                     let at = py * width + px;
-                    if let Some((d, c)) = drawn
+                    if let Some(d) = c.depth_at(px as u32, py as u32)
                         && d < depth[at]
                     {
                         depth[at] = d;
-                        rgb[at] = c;
+                        rgb[at] = raster.colour(*t);
                     }
                 }
             }
         }
-        let drawn = raster.pixels();
-        assert!(drawn == rgb, "the binned draw differs from the reference");
-        // Most of the frame was drawn, from many runs.
+        // Shared among one to four frames at random, each drawing its share backwards.
+        for frames in 1..=4 {
+            let mut shares = vec![Vec::new(); frames];
+            for (i, t) in triangles.iter().enumerate() {
+                shares[(random() % frames as u64) as usize].push((i as u64, *t));
+            }
+            let drawn: Vec<Frame> = shares
+                .iter()
+                .map(|share| {
+                    let mut frame = raster.frame();
+                    for &(i, t) in share.iter().rev() {
+                        draw(&raster, &mut frame, i, t);
+                    }
+                    frame
+                })
+                .collect();
+            let pixels = raster.pixels(&drawn);
+            assert!(pixels == rgb, "{frames} frames draw another picture");
+        }
+        // Most of the frame was drawn; and the repeated triangles turned the other way would
+        // show (as red) where they won ties: the tie rule is tested, not idle.
         let covered = depth.iter().filter(|d| d.is_finite()).count();
         assert!(covered > width * height / 2, "{covered} pixels drawn");
-        assert!(
-            runs.len() > 4 && flats.len() > 2000,
-            "{} flats",
-            flats.len()
-        );
+        let mut last_wins = raster.frame();
+        for (i, t) in triangles.iter().enumerate() {
+            draw(&raster, &mut last_wins, (triangles.len() - i) as u64, *t);
+        }
+        let ties = (raster.pixels(&[last_wins]).iter().zip(&rgb))
+            .filter(|(a, b)| a != b)
+            .count();
+        assert!(ties > 100, "{ties} pixels won on a tie");
     }
 }
