@@ -198,12 +198,14 @@ impl Preview {
     ) -> Result<(), usize> {
         let runs = triangles.len().div_ceil(RUN);
         let next = AtomicUsize::new(0);
+        let backwards = nearer_last(view, triangles, vertices);
         parts.par_iter_mut().for_each(|part| {
             loop {
                 let r = next.fetch_add(1, Ordering::Relaxed);
                 if r >= runs {
                     break;
                 }
+                let r = if backwards { runs - 1 - r } else { r };
                 let first = r * RUN;
                 let last = (first + RUN).min(triangles.len());
                 let (looked_at, count) = vertices.look_at(&triangles[first..last]);
@@ -224,12 +226,8 @@ impl Preview {
                     // The box's centres from the keys where they tell (most often).
                     let centres = pass::centres([a.1, b.1, c.1]).or_else(|| view.covers(screen));
                     if let Some(centres) = centres {
-                        view.draw(
-                            &mut part.frame,
-                            first_index + i as u64,
-                            (screen, model),
-                            centres,
-                        );
+                        let index = first_index + i as u64;
+                        view.draw(&mut part.frame, index, (screen, model), centres);
                     }
                     if let Some(s) = section
                         && s.meets([model[0][2], model[1][2], model[2][2]])
@@ -356,6 +354,17 @@ impl Preview {
         }
         image
     }
+}
+
+/// Whether the last of `triangles` is nearer the viewer than the first. Drawn from the last,
+/// a mesh made from back to front is then drawn from front to back, so that most of what
+/// lies behind its first layer is seen to be hidden before it is drawn ([`raster`]).
+fn nearer_last(view: &Raster, triangles: &[[u32; 3]], vertices: &Keyed) -> bool {
+    let depth = |t: Option<&[u32; 3]>| {
+        let (p, _) = vertices.corner(t?[0])?;
+        Some(view.screen(p)[2])
+    };
+    matches!((depth(triangles.first()), depth(triangles.last())), (Some(a), Some(b)) if b < a)
 }
 
 /// A number in few characters (`0.5`, `12.25`, `1.2e-5`).

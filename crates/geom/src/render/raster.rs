@@ -8,6 +8,10 @@
 //!   in whatever order each draws its share, and it is the fragment that drawing every
 //!   triangle in order, keeping only strictly nearer ones, would leave: the first triangle
 //!   wins a tie. So the caller may hand runs of triangles to threads as they come free.
+//! - A triangle is passed over as hidden ([`Frame::hides`]) only when every centre of its box
+//!   already holds a fragment strictly nearer than any it could give (its least corner depth,
+//!   less a margin past rounding): it could not have changed the picture, so what a frame
+//!   happens to hold decides the work done, never the result.
 //! - Watertight: a pixel centre on an edge shared by two triangles is drawn by exactly one of
 //!   them. The edge function at a centre `p` is `(a − p) × (b − p)`, whose bits for `b → a`
 //!   are exactly the negated bits for `a → b`, so both triangles see the same value, and an
@@ -116,8 +120,11 @@ struct Corners {
     z: [f64; 3],
     /// The sign of the area: `1` when it turns counter-clockwise on screen, else `−1`.
     turn: f64,
-    /// Twice the area, positive.
-    area: f64,
+    /// One over twice the area (positive): a multiplication per centre, not a division.
+    per_area: f64,
+    /// Whether edge `k` (from corner `k + 1` to `k + 2`), run the way the triangle turns,
+    /// owns the centres on its line.
+    owns: [bool; 3],
 }
 
 impl Corners {
@@ -130,20 +137,27 @@ impl Corners {
         if area == 0.0 || !area.is_finite() {
             return None;
         }
-        // A selection, not a branch: which way a triangle turns is random.
+        // Selections, not branches: which way a triangle turns is random.
         let turn = if area > 0.0 { 1.0 } else { -1.0 };
+        let owns = [0, 1, 2].map(|k| {
+            let (a, b) = ((k + 1) % 3, (k + 2) % 3);
+            let (a, b) = ((x[a], y[a]), (x[b], y[b]));
+            owns(if area > 0.0 { (a, b) } else { (b, a) })
+        });
         Some(Corners {
             x,
             y,
             z,
             turn,
-            area: area * turn,
+            per_area: 1.0 / (area * turn),
+            owns,
         })
     }
 
-    /// The depth at the centre of pixel `(px, py)`, if the triangle covers it.
-    #[inline]
-    fn depth_at(&self, px: u32, py: u32) -> Option<f32> {
+    /// Whether the triangle covers the centre of pixel `(px, py)`, and its depth there
+    /// (meaningless where it does not). Without branches: which way each test goes is random.
+    #[inline(always)]
+    fn fragment(&self, px: u32, py: u32) -> (bool, f32) {
         let (cx, cy) = (f64::from(px) + 0.5, f64::from(py) + 0.5);
         let rx = self.x.map(|x| x - cx);
         let ry = self.y.map(|y| y - cy);
@@ -154,23 +168,18 @@ impl Corners {
             rx[0] * ry[1] - ry[0] * rx[1],
         ]
         .map(|w| w * self.turn);
-        // Bitwise, not `||`: which way each goes is random.
-        if (w[0] < 0.0) | (w[1] < 0.0) | (w[2] < 0.0) {
-            return None;
-        }
-        // On an edge's line (rare): drawn only if the edge, run the way the triangle turns,
-        // owns it.
-        for (k, &w) in w.iter().enumerate() {
-            if w == 0.0 {
-                let (a, b) = ((k + 1) % 3, (k + 2) % 3);
-                let (a, b) = ((self.x[a], self.y[a]), (self.x[b], self.y[b]));
-                if !owns(if self.turn > 0.0 { (a, b) } else { (b, a) }) {
-                    return None;
-                }
-            }
-        }
+        // Inside an edge, or on its line if it owns it.
+        let within = |k: usize| (w[k] > 0.0) | ((w[k] == 0.0) & self.owns[k]);
         let z = self.z;
-        Some(((w[0] * z[0] + w[1] * z[1] + w[2] * z[2]) / self.area) as f32)
+        let depth = ((w[0] * z[0] + w[1] * z[1] + w[2] * z[2]) * self.per_area) as f32;
+        (within(0) & within(1) & within(2), depth)
+    }
+
+    /// The depth at the centre of pixel `(px, py)`, if the triangle covers it.
+    #[cfg(test)]
+    fn depth_at(&self, px: u32, py: u32) -> Option<f32> {
+        let (covers, depth) = self.fragment(px, py);
+        covers.then_some(depth)
     }
 }
 
@@ -180,7 +189,8 @@ impl Corners {
 pub struct Frame {
     /// The fragment's depth and triangle as one number ([`nearest`]), [`EMPTY`] where none.
     nearest: Vec<u64>,
-    rgb: Vec<Rgb>,
+    /// The fragment's colour, packed ([`pack`]).
+    rgb: Vec<u32>,
 }
 
 /// A pixel no triangle has drawn.
@@ -202,19 +212,73 @@ fn nearest(depth: f32, index: u64) -> u64 {
     u64::from(ordered) << 32 | (index & 0xffff_ffff)
 }
 
+/// A colour as one number, ordered as the colour is (red, then green, then blue).
+fn pack([r, g, b]: Rgb) -> u32 {
+    u32::from(r) << 16 | u32::from(g) << 8 | u32::from(b)
+}
+
+fn unpack(rgb: u32) -> Rgb {
+    [(rgb >> 16) as u8, (rgb >> 8) as u8, rgb as u8]
+}
+
 impl Frame {
-    /// Keeps the fragment `key` ([`nearest`]) of colour `rgb()` at pixel `at` if it is nearer
-    /// than the one there (or, for the same key, of a smaller colour): the colour is worked
-    /// out only then.
+    /// Whether a fragment nearer than any the small triangle of screen positions `s` could
+    /// give is already at each centre of its box `(cols, rows)`, in a frame `width` wide: then
+    /// drawing it would change nothing, and it is passed over (drawn front to back, most of
+    /// a big mesh's triangles behind its first layer are). Never true where it could draw.
     #[inline(always)]
-    fn offer(&mut self, at: usize, key: u64, rgb: impl FnOnce() -> Rgb) {
-        let here = self.nearest[at];
-        if key < here {
-            self.nearest[at] = key;
-            self.rgb[at] = rgb();
-        } else if key == here {
-            self.rgb[at] = self.rgb[at].min(rgb());
+    fn hides(
+        &self,
+        width: usize,
+        s: [[f32; 3]; 3],
+        (cols, rows): ((u32, u32), (u32, u32)),
+    ) -> bool {
+        // Only small triangles (most of a big mesh's), for which the bound below holds.
+        if cols.1 - cols.0 > 2 || rows.1 - rows.0 > 2 {
+            return false;
         }
+        let (x, y) = (s.map(|c| f64::from(c[0])), s.map(|c| f64::from(c[1])));
+        let area = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]);
+        // A fragment's depth is the corners' depths weighted by its edge functions over
+        // twice the area: weights that sum to one but for rounding. For a triangle at most
+        // 4 pixels across and of area at least 2⁻¹⁶ pixels², each weight is exact but for one
+        // rounding and so is the area but for a few parts in 10¹⁰: a fragment is nearer than
+        // the least corner depth by far less than a millionth of the depths' size. (NaN
+        // fails too.)
+        let spread = |v: [f64; 3]| v[0].max(v[1]).max(v[2]) - v[0].min(v[1]).min(v[2]);
+        let small = (spread(x) <= 4.0) & (spread(y) <= 4.0) & (area.abs() >= 1.0 / 65536.0);
+        if !small {
+            return false;
+        }
+        let z = s.map(|c| f64::from(c[2]));
+        let (low, high) = (z[0].min(z[1]).min(z[2]), z[0].max(z[1]).max(z[2]));
+        let bound = (low - (low.abs() + high.abs()) / 1_048_576.0) as f32;
+        if !bound.is_finite() {
+            return false;
+        }
+        // Below the `f32` under the bound (which may round up to it): nearer than any.
+        let below = nearest(bound.next_down(), 0) >> 32;
+        let (mut hidden, mut px, mut py) = (true, cols.0, rows.0);
+        for _ in 0..(cols.1 - cols.0) * (rows.1 - rows.0) {
+            let at = py as usize * width + px as usize;
+            hidden &= self.nearest[at] >> 32 < below;
+            px += 1;
+            let wrap = px == cols.1;
+            px = if wrap { cols.0 } else { px };
+            py += u32::from(wrap);
+        }
+        hidden
+    }
+
+    /// Keeps, if `keep`, the fragment `key` ([`nearest`]) of colour `rgb` ([`pack`]) at pixel
+    /// `at` when it is nearer than the one there (or, for the same key, of a smaller colour).
+    /// Without branches: which fragments are kept is random.
+    #[inline(always)]
+    fn offer(&mut self, keep: bool, at: usize, key: u64, rgb: u32) {
+        let (here, here_rgb) = (self.nearest[at], self.rgb[at]);
+        let wins = keep & ((key < here) | ((key == here) & (rgb < here_rgb)));
+        self.nearest[at] = if wins { key } else { here };
+        self.rgb[at] = if wins { rgb } else { here_rgb };
     }
 }
 
@@ -242,7 +306,7 @@ struct Lighting {
 impl Lighting {
     /// The colour of a face of (unnormalised) outward normal `n`. In `f32` and without
     /// branches: it runs for every triangle drawn, and which way a face turns is random.
-    #[inline]
+    #[inline(always)]
     fn shade(&self, n: [f32; 3]) -> Rgb {
         let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
         let length = dot(n, n).sqrt();
@@ -372,26 +436,31 @@ impl Raster {
         ((cols.0 < cols.1) & (rows.0 < rows.1)).then_some((cols, rows))
     }
 
-    /// The colour of a face of model corners `corners`.
+    /// The (unnormalised) outward normal of a face of model corners `corners`.
     #[inline]
-    pub fn colour(&self, [a, b, c]: [[f32; 3]; 3]) -> Rgb {
+    fn normal([a, b, c]: [[f32; 3]; 3]) -> [f32; 3] {
         let (u, v) = (
             [0, 1, 2].map(|k| b[k] - a[k]),
             [0, 1, 2].map(|k| c[k] - a[k]),
         );
-        let normal = [
+        [
             u[1] * v[2] - u[2] * v[1],
             u[2] * v[0] - u[0] * v[2],
             u[0] * v[1] - u[1] * v[0],
-        ];
-        self.lighting.shade(normal)
+        ]
+    }
+
+    /// The colour of a face of model corners `corners`, packed for [`Raster::draw`].
+    #[inline]
+    pub fn colour(&self, corners: [[f32; 3]; 3]) -> u32 {
+        pack(self.lighting.shade(Raster::normal(corners)))
     }
 
     /// A frame of this view with nothing drawn.
     pub fn frame(&self) -> Frame {
         Frame {
             nearest: vec![EMPTY; self.width * self.height],
-            rgb: vec![[0; 3]; self.width * self.height],
+            rgb: vec![0; self.width * self.height],
         }
     }
 
@@ -406,22 +475,27 @@ impl Raster {
         (s, corners): ([[f32; 3]; 3], [[f32; 3]; 3]),
         (cols, rows): ((u32, u32), (u32, u32)),
     ) {
+        if frame.hides(self.width, s, (cols, rows)) {
+            return;
+        }
         let Some(c) = Corners::new(s.map(|c| c[0]), s.map(|c| c[1]), s.map(|c| c[2])) else {
             return;
         };
-        // Worked out once, and only if a fragment is kept (most are, the first time).
-        let mut rgb = None;
-        for py in rows.0..rows.1 {
-            for px in cols.0..cols.1 {
-                // Not drawn at a NaN or +∞ depth, as a z-buffer starting at +∞ would not.
-                let Some(depth) = c.depth_at(px, py).filter(|&d| d < f32::INFINITY) else {
-                    continue;
-                };
-                let at = py as usize * self.width + px as usize;
-                frame.offer(at, nearest(depth, index), || {
-                    *rgb.get_or_insert_with(|| self.colour(corners))
-                });
-            }
+        let rgb = self.colour(corners);
+        // The box's centres row by row in one loop, without branches but the loop's own:
+        // most boxes hold one to four, and which of them the triangle covers is random.
+        let count = (cols.1 - cols.0) * (rows.1 - rows.0);
+        let (mut px, mut py) = (cols.0, rows.0);
+        for _ in 0..count {
+            let (covers, depth) = c.fragment(px, py);
+            // Not drawn at a NaN or +∞ depth, as a z-buffer starting at +∞ would not.
+            let keep = covers & (depth < f32::INFINITY);
+            let at = py as usize * self.width + px as usize;
+            frame.offer(keep, at, nearest(depth, index), rgb);
+            px += 1;
+            let wrap = px == cols.1;
+            px = if wrap { cols.0 } else { px };
+            py += u32::from(wrap);
         }
     }
 
@@ -434,7 +508,7 @@ impl Raster {
             .map(|at| {
                 let best = frames.iter().map(|f| (f.nearest[at], f.rgb[at])).min();
                 match best {
-                    Some((key, rgb)) if key != EMPTY => rgb,
+                    Some((key, rgb)) if key != EMPTY => unpack(rgb),
                     _ => self.background,
                 }
             })
@@ -633,7 +707,7 @@ mod tests {
                         && d < depth[at]
                     {
                         depth[at] = d;
-                        rgb[at] = raster.colour(*t);
+                        rgb[at] = unpack(raster.colour(*t));
                     }
                 }
             }
@@ -669,5 +743,79 @@ mod tests {
             .filter(|(a, b)| a != b)
             .count();
         assert!(ties > 100, "{ties} pixels won on a tie");
+    }
+
+    #[test]
+    fn a_triangle_is_passed_over_as_hidden_only_where_it_would_change_nothing() {
+        // Triangles of about a pixel in layers: some far apart in depth, some a ten-millionth
+        // apart, some at exactly one depth (ties the earlier triangle must win), with slivers.
+        // Drawn from front to back, most are seen to be hidden; the picture is the in-order one.
+        let (width, height) = (80, 60);
+        let raster = seen_from_above((width, height), [7, 8, 9]);
+        let mut unit = {
+            let mut random = xorshift(0x9e37_79b9_7f4a_7c15);
+            move || (random() >> 11) as f32 / (1u64 << 53) as f32
+        };
+        let layers = [0.2, 0.5, 0.5 + 1e-7, 0.5, 0.8];
+        let triangles: Vec<[[f32; 3]; 3]> = (0..40_000)
+            .map(|i| {
+                let (size, z) = ([0.02, 0.03, 0.035][i % 3], layers[i % 5]);
+                let centre = [unit(), unit()];
+                let sliver = i % 7 == 0;
+                std::array::from_fn(|k| {
+                    let t = if sliver { k as f32 * 0.5 } else { unit() };
+                    let u = if sliver { t * 1e-4 } else { unit() };
+                    [
+                        centre[0] + (t - 0.5) * size,
+                        centre[1] + (u - 0.5) * size,
+                        z,
+                    ]
+                })
+            })
+            .collect();
+        // The reference: each triangle in order over its box, keeping strictly nearer ones.
+        let mut depth = vec![f32::INFINITY; width * height];
+        let mut rgb = vec![[7u8, 8, 9]; width * height];
+        for t in &triangles {
+            let s = t.map(|p| raster.screen(p));
+            let (Some(((x0, x1), (y0, y1))), Some(c)) = (
+                raster.covers(s),
+                Corners::new(s.map(|p| p[0]), s.map(|p| p[1]), s.map(|p| p[2])),
+            ) else {
+                continue;
+            };
+            for py in y0..y1 {
+                for px in x0..x1 {
+                    let at = py as usize * width + px as usize;
+                    if let Some(d) = c.depth_at(px, py)
+                        && d < depth[at]
+                    {
+                        depth[at] = d;
+                        rgb[at] = unpack(raster.colour(*t));
+                    }
+                }
+            }
+        }
+        // Nearest first (the view looks down: higher is nearer), ties in reverse order.
+        let mut order: Vec<usize> = (0..triangles.len()).collect();
+        order.sort_by(|&a, &b| {
+            triangles[b][0][2]
+                .total_cmp(&triangles[a][0][2])
+                .then(b.cmp(&a))
+        });
+        let mut frame = raster.frame();
+        let mut hidden = 0;
+        for &i in &order {
+            let s = triangles[i].map(|p| raster.screen(p));
+            if let Some(centres) = raster.covers(s) {
+                hidden += usize::from(frame.hides(width, s, centres));
+                raster.draw(&mut frame, i as u64, (s, triangles[i]), centres);
+            }
+        }
+        assert!(
+            raster.pixels(&[frame]) == rgb,
+            "hidden triangles changed the picture"
+        );
+        assert!(hidden > triangles.len() / 10, "{hidden} hidden");
     }
 }
