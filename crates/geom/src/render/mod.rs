@@ -45,8 +45,11 @@ const MAX_WARNINGS: usize = 4;
 const FILL: f64 = 0.86;
 /// Triangles one task takes in a row, so the thread pool's cost per task is small against it.
 const RUN: usize = pass::RUN;
-/// At most this many frames draw a view at once (each is the size of the view).
+/// At most this many frames draw a view at once (each is the size of the view)...
 const MAX_PARTS: usize = 8;
+/// ...and no more than fit in this many bytes together (a preview 8192 pixels a side has
+/// frames of 400 MB: it is drawn by one worker).
+const FRAMES_BUDGET: usize = 256 << 20;
 
 /// What one worker drew: its frame of the view, and the cuts by the section's plane not yet
 /// recorded.
@@ -254,7 +257,8 @@ impl Preview {
         borrowed: &[(u32, [f32; 3])],
     ) -> Result<(), usize> {
         if self.parts.is_empty() {
-            let workers = rayon::current_num_threads().clamp(1, MAX_PARTS);
+            let fit = FRAMES_BUDGET / self.view.frame_bytes().max(1);
+            let workers = rayon::current_num_threads().min(MAX_PARTS).min(fit).max(1);
             self.parts = (0..workers)
                 .map(|_| Part {
                     frame: self.view.frame(),

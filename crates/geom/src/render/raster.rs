@@ -456,6 +456,11 @@ impl Raster {
         pack(self.lighting.shade(Raster::normal(corners)))
     }
 
+    /// The bytes a frame of this view takes ([`Raster::frame`]).
+    pub fn frame_bytes(&self) -> usize {
+        self.width * self.height * (size_of::<u64>() + size_of::<u32>())
+    }
+
     /// A frame of this view with nothing drawn.
     pub fn frame(&self) -> Frame {
         Frame {
