@@ -21,9 +21,9 @@ pub mod raster;
 pub mod section;
 
 use std::io::{self, Write};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use crate::mesh::{Mesh, MeshChunk};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use rayon::prelude::*;
 
@@ -259,9 +259,12 @@ impl Preview {
         if self.parts.is_empty() {
             let fit = FRAMES_BUDGET / self.view.frame_bytes().max(1);
             let workers = rayon::current_num_threads().min(MAX_PARTS).min(fit).max(1);
+            // Each frame is made (its pages faulted in and filled) by a thread of the pool.
+            let view = &self.view;
             self.parts = (0..workers)
+                .into_par_iter()
                 .map(|_| Part {
-                    frame: self.view.frame(),
+                    frame: view.frame(),
                     cuts: Vec::new(),
                     bad: None,
                 })

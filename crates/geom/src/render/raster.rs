@@ -258,15 +258,11 @@ impl Frame {
         }
         // Below the `f32` under the bound (which may round up to it): nearer than any.
         let below = nearest(bound.next_down(), 0) >> 32;
-        let (mut hidden, mut px, mut py) = (true, cols.0, rows.0);
-        for _ in 0..(cols.1 - cols.0) * (rows.1 - rows.0) {
+        let mut hidden = true;
+        each_centre((cols, rows), |px, py| {
             let at = py as usize * width + px as usize;
             hidden &= self.nearest[at] >> 32 < below;
-            px += 1;
-            let wrap = px == cols.1;
-            px = if wrap { cols.0 } else { px };
-            py += u32::from(wrap);
-        }
+        });
         hidden
     }
 
@@ -321,6 +317,21 @@ impl Lighting {
         // `+ 0.5` then truncation rounds a non-negative value, without `round` (a library
         // call on the baseline x86-64 target).
         base.map(|c| (255.0 * (c * light).clamp(0.0, 1.0) + 0.5) as u8)
+    }
+}
+
+/// Calls `at(px, py)` for each pixel of columns `cols` and rows `rows` (`[first, last + 1)`
+/// each, not empty), row by row, in one loop without branches but the loop's own: most boxes
+/// hold one to four centres, and what is done at each is decided without branches too.
+#[inline(always)]
+fn each_centre((cols, rows): ((u32, u32), (u32, u32)), mut at: impl FnMut(u32, u32)) {
+    let (mut px, mut py) = (cols.0, rows.0);
+    for _ in 0..(cols.1 - cols.0) * (rows.1 - rows.0) {
+        at(px, py);
+        px += 1;
+        let wrap = px == cols.1;
+        px = if wrap { cols.0 } else { px };
+        py += u32::from(wrap);
     }
 }
 
@@ -487,21 +498,13 @@ impl Raster {
             return;
         };
         let rgb = self.colour(corners);
-        // The box's centres row by row in one loop, without branches but the loop's own:
-        // most boxes hold one to four, and which of them the triangle covers is random.
-        let count = (cols.1 - cols.0) * (rows.1 - rows.0);
-        let (mut px, mut py) = (cols.0, rows.0);
-        for _ in 0..count {
+        each_centre((cols, rows), |px, py| {
             let (covers, depth) = c.fragment(px, py);
             // Not drawn at a NaN or +∞ depth, as a z-buffer starting at +∞ would not.
             let keep = covers & (depth < f32::INFINITY);
             let at = py as usize * self.width + px as usize;
             frame.offer(keep, at, nearest(depth, index), rgb);
-            px += 1;
-            let wrap = px == cols.1;
-            px = if wrap { cols.0 } else { px };
-            py += u32::from(wrap);
-        }
+        });
     }
 
     /// The picture, row by row: at each pixel the nearest fragment of all `frames`, which
