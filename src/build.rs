@@ -21,6 +21,9 @@
 //!   the write stage only puts such a file in place, the preview stage only adds the caption,
 //!   and only when their input is the mesh it was made from (same hash). Unused files are
 //!   removed when the build ends: the sink's files stay whole or absent.
+//! - Likewise the pictures of a whole mesh's preview nodes are drawn while its write node runs,
+//!   on a thread of their own whose parallel work goes to the global pool; the write's thread
+//!   then waits by doing the pool's work, so that work is done even with one thread.
 
 use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
@@ -30,6 +33,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use latticebuild_geom::mesh::MeshChunk;
+use latticebuild_geom::render::Preview;
 
 use crate::cache::{
     Cache, CacheError, ContentHash, EntryReader, Key, KeyDescription, Lookup, Opened, SizeLimit,
@@ -45,6 +49,17 @@ use crate::stages::write::{MeshInput, WriteError};
 use crate::stages::{
     MeshArtifact, OutputSink, Stage, StageError, WrittenFile, WrittenOutput, warnings,
 };
+
+/// Waits for `thread`, which queues work on the global pool, by doing the pool's work
+/// meanwhile: a thread of the pool that waited idle could leave that work undone (with one
+/// thread, forever).
+fn wait_helping_the_pool<T>(thread: &std::thread::ScopedJoinHandle<'_, T>) {
+    while !thread.is_finished() {
+        if rayon::yield_now() != Some(rayon::Yield::Executed) {
+            std::thread::sleep(std::time::Duration::from_micros(50));
+        }
+    }
+}
 
 /// A tile stage's inputs: its cells' payloads, the scaffold file's bytes, the density table.
 type TileInputs<'a> = (&'a [&'a [u8]], Option<&'a [u8]>, Option<&'a [u8]>);
@@ -951,7 +966,19 @@ impl<'a> Builder<'a> {
                     _ => Vec::new(),
                 };
                 let input = match input(0) {
-                    Value::Mesh(mesh) => stage.run(MeshInput::Whole(&mesh), self.sink, prewritten),
+                    Value::Mesh(mesh) => {
+                        // The pictures of the previews of this write are drawn while it
+                        // writes: writing and measuring leave a core idle much of the time.
+                        let (written, pictures) = std::thread::scope(|scope| {
+                            let drawing = scope.spawn(|| self.draw_beside(id, &mesh));
+                            let written = stage.run(MeshInput::Whole(&mesh), self.sink, prewritten);
+                            wait_helping_the_pool(&drawing);
+                            (written, drawing.join().unwrap_or_default())
+                        });
+                        self.early
+                            .keep(self.resolved[&node.inputs[0]].hash, pictures);
+                        written
+                    }
                     Value::Chunked(mesh) => stage.run(
                         MeshInput::Chunked {
                             chunks: &*mesh,
@@ -972,6 +999,34 @@ impl<'a> Builder<'a> {
                 }
             }
         }
+    }
+
+    /// The pictures of the preview nodes that read write node `write` and its whole mesh
+    /// `mesh`, drawn to the spec they will have
+    /// ([`crate::stages::preview::PreviewStage::spec_of`]); none for a mesh
+    /// with a corner out of range (its preview node reports it).
+    fn draw_beside(&self, write: NodeId, mesh: &MeshArtifact) -> Vec<(NodeId, Made)> {
+        let source = self.graph.nodes[write].inputs.first();
+        let readers = self
+            .graph
+            .nodes
+            .iter()
+            .enumerate()
+            .filter_map(|(id, n)| match &n.stage {
+                Stage::Preview(preview)
+                    if n.inputs.first() == source && n.inputs.get(1) == Some(&write) =>
+                {
+                    Some((id, preview))
+                }
+                _ => None,
+            });
+        readers
+            .filter_map(|(id, preview)| {
+                let mut picture = Preview::new(preview.spec_of(mesh));
+                picture.add_mesh(&mesh.mesh).ok()?;
+                Some((id, Made::Picture(Box::new(picture))))
+            })
+            .collect()
     }
 
     /// Runs a `preview` node: its inputs are the mesh, the write's record, then the cell

@@ -3,8 +3,8 @@
 //! the output's box; a planar region seen from above).
 //!
 //! It reads the mesh (whole, or a tiling's chunks streamed from the cache entry: never whole
-//! in memory; or takes the picture drawn while the tiling ran, [`crate::early`], when it was
-//! drawn to the same spec), the write stage's record (for the caption's triangle count, volume fraction
+//! in memory; or takes the picture drawn while the tiling ran, [`crate::early`], or while
+//! the write ran, when it was drawn to the same spec), the write stage's record (for the caption's triangle count, volume fraction
 //! and warnings) and the payloads of the cell stages whose warnings the report repeats, so
 //! its key holds everything its picture shows. A change of formats reruns the write and this
 //! stage, nothing before them. Like the write stage it reaches its file only through the
@@ -15,7 +15,7 @@ use latticebuild_geom::mesh_io::Pass;
 use latticebuild_geom::render::{Line, Preview, Spec};
 
 use super::StageError;
-use super::artifact::{WrittenFile, WrittenOutput};
+use super::artifact::{MeshArtifact, MeshSummary, TilingSummary, WrittenFile, WrittenOutput};
 use super::chunked::is_corrupt;
 use super::warnings;
 use super::write::{MeshInput, OutputSink, WriteError};
@@ -101,16 +101,37 @@ impl PreviewStage {
     /// found by an SDF program, or the manifest's), else the mesh's bounding box; the section
     /// cuts its middle.
     fn spec(&self, written: &WrittenOutput) -> Spec {
-        if let Some(bbox) = written.tiling.as_ref().and_then(|t| t.scaffold_bbox) {
+        let planar = written.planar_element_area.is_some();
+        self.spec_from(
+            written.tiling.as_ref(),
+            written.domain,
+            &written.summary,
+            planar,
+        )
+    }
+
+    /// The spec of the picture of a whole mesh, known before it is written: the same as
+    /// [`PreviewStage::spec`] of its write record, which copies these fields from it.
+    pub fn spec_of(&self, mesh: &MeshArtifact) -> Spec {
+        let planar = mesh.planar.is_some();
+        self.spec_from(mesh.tiling.as_ref(), mesh.domain, &mesh.summary, planar)
+    }
+
+    fn spec_from(
+        &self,
+        tiling: Option<&TilingSummary>,
+        domain: Option<[[f64; 3]; 2]>,
+        summary: &MeshSummary,
+        planar: bool,
+    ) -> Spec {
+        if let Some(bbox) = tiling.and_then(|t| t.scaffold_bbox) {
             return self.tiling_spec(bbox);
         }
-        let s = &written.summary;
-        let bbox = written
-            .domain
+        let bbox = domain
             .or(self.domain)
-            .filter(|_| written.tiling.is_none())
-            .unwrap_or([s.bbox_min, s.bbox_max]);
-        self.fitted(bbox, written.planar_element_area.is_some())
+            .filter(|_| tiling.is_none())
+            .unwrap_or([summary.bbox_min, summary.bbox_max]);
+        self.fitted(bbox, planar)
     }
 
     /// The picture of a 3D tiling of a scaffold of box `bbox`.
@@ -209,7 +230,73 @@ fn thousands(n: u64) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::thousands;
+    use super::*;
+    use crate::files::OutputDir;
+    use crate::stages::artifact::Planar;
+    use crate::stages::measure::ReportLevel;
+    use crate::stages::write::{WriteStage, stamp};
+    use latticebuild_geom::mesh::Mesh;
+    use latticebuild_geom::mesh_io::{Encoding, Format};
+
+    #[test]
+    fn the_spec_of_a_whole_mesh_before_its_write_is_the_one_of_its_write_record() {
+        // A picture drawn while the write runs is used only if drawn to the spec the preview
+        // stage then finds from the write's record: with the output's box given, with the
+        // mesh's own box, with the manifest's domain, for a planar region.
+        let mesh = Mesh {
+            vertices: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 3.0]],
+            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        };
+        let dir = tempfile::tempdir().expect("temp dir");
+        let sink = OutputDir::new(dir.path().to_path_buf());
+        let write = WriteStage {
+            formats: vec![Format::Stl],
+            encoding: Encoding::Binary,
+            stem: "t".into(),
+            report: ReportLevel::Basic,
+            pore_box: None,
+            stamp: stamp("t", "mm", Vec::new()),
+        };
+        let mut checked = 0;
+        for (domain, planar) in [
+            (None, false),
+            (Some([[-1.0; 3], [4.0; 3]]), false),
+            (None, true),
+        ] {
+            let artifact = MeshArtifact {
+                summary: MeshSummary::of_mesh(&mesh, planar),
+                mesh: mesh.clone(),
+                planar: planar.then(|| Planar {
+                    boundary: Vec::new(),
+                    element: Vec::new(),
+                    element_area: 1.0,
+                    svg: None,
+                }),
+                domain,
+                tiling: None,
+                shell: None,
+                sizing: None,
+            };
+            let written = write
+                .run(MeshInput::Whole(&artifact), &sink, Vec::new())
+                .expect("written");
+            for manifest_domain in [None, Some([[-2.0; 3], [5.0; 3]])] {
+                let preview = PreviewStage {
+                    output: "t".into(),
+                    stem: "t".into(),
+                    size: DEFAULT_SIZE,
+                    domain: manifest_domain,
+                    within: false,
+                    carriers: Vec::new(),
+                };
+                let spec = preview.spec(&written);
+                assert_eq!(preview.spec_of(&artifact), spec, "{domain:?} {planar}");
+                assert_eq!(spec.cut.is_none(), planar);
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 6);
+    }
 
     #[test]
     fn thousands_are_separated() {
