@@ -33,7 +33,6 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use latticebuild_geom::mesh::MeshChunk;
-use latticebuild_geom::render::Preview;
 
 use crate::cache::{
     Cache, CacheError, ContentHash, EntryReader, Key, KeyDescription, Lookup, Opened, SizeLimit,
@@ -1002,9 +1001,7 @@ impl<'a> Builder<'a> {
     }
 
     /// The pictures of the preview nodes that read write node `write` and its whole mesh
-    /// `mesh`, drawn to the spec they will have
-    /// ([`crate::stages::preview::PreviewStage::spec_of`]); none for a mesh
-    /// with a corner out of range (its preview node reports it).
+    /// `mesh` ([`crate::stages::preview::PreviewStage::draw_whole`]).
     fn draw_beside(&self, write: NodeId, mesh: &MeshArtifact) -> Vec<(NodeId, Made)> {
         let source = self.graph.nodes[write].inputs.first();
         let readers = self
@@ -1022,8 +1019,7 @@ impl<'a> Builder<'a> {
             });
         readers
             .filter_map(|(id, preview)| {
-                let mut picture = Preview::new(preview.spec_of(mesh));
-                picture.add_mesh(&mesh.mesh).ok()?;
+                let picture = preview.draw_whole(mesh)?;
                 Some((id, Made::Picture(Box::new(picture))))
             })
             .collect()

@@ -4,9 +4,10 @@
 //!
 //! It reads the mesh (whole, or a tiling's chunks streamed from the cache entry: never whole
 //! in memory; or takes the picture drawn while the tiling ran, [`crate::early`], or while
-//! the write ran, when it was drawn to the same spec), the write stage's record (for the caption's triangle count, volume fraction
-//! and warnings) and the payloads of the cell stages whose warnings the report repeats, so
-//! its key holds everything its picture shows. A change of formats reruns the write and this
+//! the write ran, [`PreviewStage::draw_whole`], when it was drawn to the same spec), the
+//! write stage's record (for the caption's triangle count, volume fraction and warnings) and
+//! the payloads of the cell stages whose warnings the report repeats, so its key holds
+//! everything its picture shows. A change of formats reruns the write and this
 //! stage, nothing before them. Like the write stage it reaches its file only through the
 //! [`OutputSink`], and a chunked input found corrupt while read is
 //! [`WriteError::CorruptInput`] (the builder reruns the node that made it).
@@ -115,6 +116,13 @@ impl PreviewStage {
     pub fn spec_of(&self, mesh: &MeshArtifact) -> Spec {
         let planar = mesh.planar.is_some();
         self.spec_from(mesh.tiling.as_ref(), mesh.domain, &mesh.summary, planar)
+    }
+
+    /// The picture of a whole mesh, drawn before its write record exists (to
+    /// [`PreviewStage::spec_of`]); `None` for a mesh with a corner out of range, which the
+    /// stage reports when it runs.
+    pub fn draw_whole(&self, mesh: &MeshArtifact) -> Option<Preview> {
+        draw(self.spec_of(mesh), MeshInput::Whole(mesh)).ok()
     }
 
     fn spec_from(
